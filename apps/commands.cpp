@@ -1,0 +1,7 @@
+#include "apps/commands.hpp"
+
+namespace varmesh::app {
+
+int run(int, char**) { return 0; }
+
+}  // namespace varmesh::app

@@ -1,0 +1,59 @@
+#include "multitri/camera.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace varmesh {
+
+bool Frustum::intersects_sphere(const glm::vec3& c, float r) const noexcept {
+  for (const auto& p : planes)
+    if (p.signed_distance(c) < -r) return false;
+  return true;
+}
+
+glm::mat4 Camera::view() const { return glm::lookAt(eye, target, up); }
+
+glm::mat4 Camera::projection() const {
+  return glm::perspective(glm::radians(fov_y_deg), aspect, z_near, z_far);
+}
+
+glm::vec3 Camera::forward() const { return glm::normalize(target - eye); }
+
+float Camera::pixels_per_unit_at_distance_one(float viewport_height) const {
+  return viewport_height / (2.0f * std::tan(glm::radians(fov_y_deg) * 0.5f));
+}
+
+Frustum Camera::frustum() const {
+  // Gribb-Hartmann extraction from the clip matrix: each plane is a sum or difference of matrix rows.
+  const glm::mat4 m = projection() * view();
+  auto row = [&](int i) { return glm::vec4(m[0][i], m[1][i], m[2][i], m[3][i]); };
+  const glm::vec4 r0 = row(0), r1 = row(1), r2 = row(2), r3 = row(3);
+  const glm::vec4 raw[6] = {r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2, r3 - r2};
+  Frustum f;
+  for (int i = 0; i < 6; ++i) {
+    const glm::vec3 n(raw[i]);
+    const float len = glm::length(n);
+    f.planes[static_cast<std::size_t>(i)] = Plane{n / len, raw[i].w / len};
+  }
+  return f;
+}
+
+Camera frame_sphere(const glm::vec3& center, float radius, const glm::vec3& dir, float fov_y_deg, float aspect,
+                    const glm::vec3& up) {
+  Camera cam;
+  cam.fov_y_deg = fov_y_deg;
+  cam.aspect = aspect;
+  const float half = glm::radians(fov_y_deg) * 0.5f * std::min(1.0f, aspect);
+  const float dist = radius / std::sin(half);
+  cam.target = center;
+  cam.eye = center - glm::normalize(dir) * dist;
+  cam.up = up;
+  cam.z_near = std::max(dist - radius * 1.5f, dist * 1e-3f);
+  cam.z_far = dist + radius * 1.5f;
+  return cam;
+}
+
+}  // namespace varmesh

@@ -1,0 +1,51 @@
+#pragma once
+/// Perspective cameras and view frusta, shared by the query criteria and the renderer.
+#include <array>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+namespace varmesh {
+
+/// A plane n.x + d = 0 with unit normal n pointing to the inside (kept) half-space.
+struct Plane {
+  glm::vec3 n{0.0f, 0.0f, 1.0f};
+  float d = 0.0f;
+  float signed_distance(const glm::vec3& p) const noexcept { return n.x * p.x + n.y * p.y + n.z * p.z + d; }
+};
+
+/// Six inward planes: left, right, bottom, top, near, far.
+struct Frustum {
+  std::array<Plane, 6> planes{};
+  /// True when the sphere is not entirely outside any plane (conservative: may say true for a sphere just
+  /// outside a frustum corner).
+  bool intersects_sphere(const glm::vec3& c, float r) const noexcept;
+  bool contains_point(const glm::vec3& p) const noexcept { return intersects_sphere(p, 0.0f); }
+};
+
+/// A perspective camera. Angles in degrees; `aspect` = width / height.
+struct Camera {
+  glm::vec3 eye{0.0f, -3.0f, 2.0f};
+  glm::vec3 target{0.0f, 0.0f, 0.0f};
+  glm::vec3 up{0.0f, 0.0f, 1.0f};
+  float fov_y_deg = 45.0f;
+  float aspect = 4.0f / 3.0f;
+  float z_near = 0.01f;
+  float z_far = 1000.0f;
+
+  glm::mat4 view() const;
+  glm::mat4 projection() const;
+  Frustum frustum() const;
+  /// Pixels per unit of world length seen at distance 1 on a viewport `viewport_height` pixels high.
+  float pixels_per_unit_at_distance_one(float viewport_height) const;
+  /// Unit vector from eye to target.
+  glm::vec3 forward() const;
+};
+
+/// Frames a bounding sphere: camera looking at `center` from direction `dir` (need not be unit) so that
+/// the sphere fills the view; z_near/z_far set around it.
+Camera frame_sphere(const glm::vec3& center, float radius, const glm::vec3& dir, float fov_y_deg, float aspect,
+                    const glm::vec3& up = {0.0f, 0.0f, 1.0f});
+
+}  // namespace varmesh

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# One idempotent set-up: installs the Debian packages varmesh needs (only those missing), then configures
+# and builds the Release tree in build/release. Usage: scripts/setup.sh [--asan] [--no-build]
+#   --asan      also configure and build the Debug + ASan/UBSan tree in build/asan
+#   --no-build  install packages only
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(cmake g++ make libeigen3-dev libglm-dev libosd-dev libgtest-dev libgmock-dev libbenchmark-dev
+          libpng-dev libcli11-dev zlib1g-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}" >&2
+  SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+build_asan=0
+build=1
+for a in "$@"; do
+  case "$a" in
+    --asan) build_asan=1 ;;
+    --no-build) build=0 ;;
+    *) echo "setup: unknown option $a" >&2; exit 2 ;;
+  esac
+done
+[ $build -eq 1 ] || exit 0
+
+jobs=$(nproc)
+werror=OFF
+[ "${CI:-}" = "true" ] && werror=ON
+cmake -S . -B build/release -DCMAKE_BUILD_TYPE=Release -DVARMESH_WERROR=$werror >/dev/null
+cmake --build build/release -j"$jobs"
+if [ $build_asan -eq 1 ]; then
+  cmake -S . -B build/asan -DCMAKE_BUILD_TYPE=Debug -DVARMESH_SANITIZE=ON -DVARMESH_BUILD_BENCH=OFF \
+        -DVARMESH_WERROR=$werror >/dev/null
+  cmake --build build/asan -j"$jobs"
+fi

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Runs every test: set-up (packages + both builds), the Release suite, the ASan+UBSan suite, and the
+# find_package(varmesh) consumer project built against an installed copy.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh --asan
+jobs=$(nproc)
+
+echo "== Release tests =="
+ctest --test-dir build/release --output-on-failure -j"$jobs"
+
+echo "== ASan + UBSan tests =="
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build/asan --output-on-failure -j"$jobs"
+
+echo "== Installed package consumer =="
+rm -rf build/install build/consumer
+cmake --install build/release --prefix build/install >/dev/null
+cmake -S examples/consumer -B build/consumer -DCMAKE_PREFIX_PATH="$PWD/build/install" >/dev/null
+cmake --build build/consumer -j"$jobs" >/dev/null
+build/consumer/consumer
