@@ -48,7 +48,4 @@ struct WriteOptions {
 /// normals, texcoords and colours when present and the format supports them. Throws IoError.
 void write_mesh(const std::string& path, const TriMesh& mesh, const WriteOptions& options = {});
 
-/// Writes `contents` to `path` atomically: temporary file in the same folder, then rename. Throws IoError.
-void write_file_atomically(const std::string& path, const std::string& contents);
-
 }  // namespace varmesh
