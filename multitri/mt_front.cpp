@@ -1,2 +1,121 @@
-// placeholder: filled in by its owner
-namespace varmesh {}
+#include "multitri/mt_front.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "multitri/errors.hpp"
+
+namespace varmesh {
+
+MtFront::MtFront(const Mt& mt) : mt_(&mt) { reset(); }
+
+void MtFront::reset() {
+  const std::size_t nn = mt_->num_nodes();
+  applied_.assign(nn, 0);
+  missing_parents_.resize(nn);
+  for (NodeId n = 0; n < nn; ++n) missing_parents_[n] = static_cast<Index>(mt_->parents(n).size());
+  applied_children_.assign(nn, 0);
+  faces_.clear();
+  slot_.assign(mt_->num_faces(), kInvalid);
+  num_applied_ = 0;
+  apply(0);
+}
+
+void MtFront::add_face(FaceId f) {
+  slot_[f] = static_cast<Index>(faces_.size());
+  faces_.push_back(f);
+}
+
+void MtFront::remove_face(FaceId f) {
+  const Index s = slot_[f];
+  const FaceId last = faces_.back();
+  faces_[s] = last;
+  slot_[last] = s;
+  faces_.pop_back();
+  slot_[f] = kInvalid;
+}
+
+void MtFront::apply(NodeId n) {
+  if (!can_apply(n))
+    throw InvalidInput("MtFront::apply: node " + std::to_string(n) +
+                           (applied_[n] ? " is already applied" : " has a parent that is not applied"),
+                       n);
+  for (FaceId f : mt_->pre_image(n)) remove_face(f);
+  for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f) add_face(f);
+  applied_[n] = 1;
+  ++num_applied_;
+  for (NodeId c : mt_->children(n)) --missing_parents_[c];
+  for (NodeId p : mt_->parents(n)) ++applied_children_[p];
+}
+
+void MtFront::undo(NodeId n) {
+  if (!can_undo(n))
+    throw InvalidInput("MtFront::undo: node " + std::to_string(n) +
+                           (n == 0 ? " is the source"
+                                   : !applied_[n] ? " is not applied" : " has an applied child"),
+                       n);
+  for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f) remove_face(f);
+  for (FaceId f : mt_->pre_image(n)) add_face(f);
+  applied_[n] = 0;
+  --num_applied_;
+  for (NodeId c : mt_->children(n)) ++missing_parents_[c];
+  for (NodeId p : mt_->parents(n)) --applied_children_[p];
+}
+
+TriMesh MtFront::to_mesh(std::vector<FaceId>* face_ids, std::vector<VertexId>* vertex_ids) const {
+  TriMesh out;
+  std::vector<FaceId> order(faces_.begin(), faces_.end());
+  std::sort(order.begin(), order.end());  // deterministic output whatever the move history
+  std::vector<Index> remap(mt_->num_vertices(), kInvalid);
+  std::vector<VertexId> used;
+  out.indices.reserve(order.size() * 3);
+  for (FaceId f : order)
+    for (VertexId v : mt_->face(f)) {
+      if (remap[v] == kInvalid) {
+        remap[v] = static_cast<Index>(used.size());
+        used.push_back(v);
+      }
+      out.indices.push_back(remap[v]);
+    }
+  out.positions.reserve(used.size());
+  for (VertexId v : used) out.positions.push_back(mt_->position(v));
+  if (face_ids) *face_ids = std::move(order);
+  if (vertex_ids) *vertex_ids = std::move(used);
+  return out;
+}
+
+void MtFront::validate() const {
+  const Mt& mt = *mt_;
+  auto fail = [](const std::string& why, std::uint64_t e) { throw InvalidInput("MtFront::validate: " + why, e); };
+  if (!applied_[0]) fail("the source is not applied", 0);
+  std::size_t count = 0;
+  for (NodeId n = 0; n < mt.num_nodes(); ++n) {
+    if (!applied_[n]) continue;
+    ++count;
+    for (NodeId p : mt.parents(n))
+      if (!applied_[p]) fail("node " + std::to_string(n) + " is applied but its parent " + std::to_string(p) + " is not", n);
+  }
+  if (count != num_applied_) fail("applied count is stale", count);
+  std::size_t expected = 0;
+  for (FaceId f = 0; f < mt.num_faces(); ++f) {
+    const bool in = applied_[mt.creator(f)] && (mt.destroyer(f) == kInvalid || !applied_[mt.destroyer(f)]);
+    if (in != has_face(f)) fail("face " + std::to_string(f) + (in ? " is missing from" : " should not be in") + " the front", f);
+    if (in) {
+      ++expected;
+      if (faces_[slot_[f]] != f) fail("face slot table is corrupt", f);
+    }
+  }
+  if (expected != faces_.size()) fail("face list has extra entries", faces_.size());
+  // Conformity: every directed edge appears once, and its reverse at most once.
+  std::vector<std::uint64_t> edges;
+  edges.reserve(faces_.size() * 3);
+  for (FaceId f : faces_) {
+    const auto v = mt.face(f);
+    for (int k = 0; k < 3; ++k) edges.push_back((std::uint64_t(v[k]) << 32) | v[(k + 1) % 3]);
+  }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 1; i < edges.size(); ++i)
+    if (edges[i] == edges[i - 1]) fail("directed edge used twice: the front is not a conforming mesh", i);
+}
+
+}  // namespace varmesh

@@ -1,1 +1,205 @@
+// Regular 4-8 terrain hierarchies: structure, error bounds measured over every sample, crack-free
+// view-dependent meshes, agreement with the explicit MT, and extract/update equality.
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "fourk/grid48.hpp"
+#include "multitri/heightfield.hpp"
+#include "multitri/mesh_report.hpp"
+#include "multitri/mt_front.hpp"
+#include "multitri/query.hpp"
+#include "multitri/terrain_gen.hpp"
+#include "test_support.hpp"
+
+namespace varmesh {
+namespace {
+
+// Every interior edge shared by exactly two consistently oriented triangles, boundary edges only on the
+// grid rectangle, no T-junction (a vertex lying inside another triangle's edge), area = rectangle's area.
+void expect_conforming_cover(const TriMesh& m, double width, double height) {
+  std::map<std::pair<Index, Index>, int> directed;
+  double area = 0.0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const glm::dvec3 a(m.positions[m.corner(f, 0)]), b(m.positions[m.corner(f, 1)]), c(m.positions[m.corner(f, 2)]);
+    const double sa = 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
+    ASSERT_GT(sa, 0.0) << "face " << f << " is not counter-clockwise";
+    area += sa;
+    for (int k = 0; k < 3; ++k) {
+      const auto key = std::make_pair(m.corner(f, k), m.corner(f, (k + 1) % 3));
+      ASSERT_EQ(directed[key]++, 0) << "directed edge used twice";
+    }
+  }
+  EXPECT_NEAR(area, width * height, 1e-6 * width * height);
+  for (const auto& [e, n] : directed) {
+    if (directed.count({e.second, e.first})) continue;
+    // A boundary edge must lie on the rectangle's border.
+    const glm::vec3 a = m.positions[e.first], b = m.positions[e.second];
+    const bool on_border = (a.x == 0 && b.x == 0) || (a.y == 0 && b.y == 0) ||
+                           (std::abs(a.x - width) < 1e-4 && std::abs(b.x - width) < 1e-4) ||
+                           (std::abs(a.y - height) < 1e-4 && std::abs(b.y - height) < 1e-4);
+    ASSERT_TRUE(on_border) << "crack: boundary edge inside the domain at (" << a.x << "," << a.y << ")-(" << b.x
+                           << "," << b.y << ")";
+  }
+}
+
+TEST(Grid48, StructureOfA9x9Grid) {
+  const HeightField f = make_fractal_terrain(9, 9, 1);
+  const Grid48 g(f, {1.0, 8});
+  EXPECT_EQ(g.tile_size(), 8u);
+  EXPECT_EQ(g.num_nodes(), 81u - 4u);
+  EXPECT_EQ(g.num_levels(), 6);
+  // Every node's children list it as a parent and vice versa.
+  for (Index p = 0; p < g.num_points(); ++p) {
+    if (!g.is_node(p)) continue;
+    g.for_each_child(p, [&](Index c) {
+      bool found = false;
+      g.for_each_parent(c, [&](Index q) { found = found || q == p; });
+      EXPECT_TRUE(found) << "child " << c << " of " << p << " does not list it as a parent";
+      EXPECT_EQ(g.level(c), g.level(p) + 1);
+    });
+  }
+}
+
+TEST(Grid48, FullRefinementIsTheGridAndExplicitMtAgrees) {
+  const HeightField f = make_fractal_terrain(17, 17, 2);
+  const Grid48 g(f, {1.0, 16});
+  Grid48Front front(g);
+  Query q;
+  q.criterion = Criterion::object_error(0.0f);
+  extract(front, q);
+  front.validate();
+  // Zero error on a rough terrain refines everything: 2 triangles per cell.
+  EXPECT_EQ(front.num_faces(), 2u * 16u * 16u);
+  const Mt mt = g.to_mt();
+  mt.validate();
+  EXPECT_EQ(mt.num_nodes(), 1 + g.num_nodes());
+  // Same query on the explicit MT through the same API gives the same triangles.
+  for (float e : {0.0f, 1.0f, 5.0f, 20.0f, 200.0f}) {
+    Query qe;
+    qe.criterion = Criterion::object_error(e);
+    Grid48Front gf(g);
+    extract(gf, qe);
+    MtFront mf(mt);
+    extract(mf, qe);
+    mf.validate();
+    std::multiset<std::array<Index, 3>> a, b;
+    gf.for_each_triangle([&](Index x, Index y, Index z) {
+      std::array<Index, 3> t{x, y, z};
+      std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+      a.insert(t);
+    });
+    for (FaceId fc : mf.faces()) {
+      auto t = mt.face(fc);
+      std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+      b.insert(t);
+    }
+    EXPECT_EQ(a, b) << "threshold " << e;
+  }
+}
+
+void check_error_bound(const HeightField& f, const std::vector<float>& thresholds) {
+  const Grid48 g(f);
+  for (float e : thresholds) {
+    Grid48Front front(g);
+    Query q;
+    q.criterion = Criterion::object_error(e);
+    extract(front, q);
+    const TriMesh m = front.to_mesh();
+    const double measured = g.max_vertical_error(m);
+    EXPECT_LE(measured, double(e)) << "threshold " << e << " violated on a " << f.width << "x" << f.height << " grid";
+    expect_conforming_cover(m, double(f.width - 1), double(f.height - 1));
+  }
+}
+
+TEST(Grid48, ErrorBoundHoldsOnGeneratedTerrainsOfAnySize) {
+  check_error_bound(make_fractal_terrain(65, 65, 3), {0.5f, 2.0f, 8.0f, 30.0f});
+  check_error_bound(make_fractal_terrain(100, 37, 4), {0.5f, 2.0f, 8.0f, 30.0f});
+  check_error_bound(make_fractal_terrain(2, 2, 5), {0.0f, 1.0f});
+  check_error_bound(make_fractal_terrain(131, 77, 6), {1.0f, 10.0f});
+}
+
+TEST(Grid48, ErrorBoundHoldsOnRealTerrainsSharedData) {
+  VARMESH_REQUIRE_SHARED(jacks, "terrain/jacksboro_fault_dem_403x344.pgm");
+  check_error_bound(read_heightfield(jacks), {1.0f, 5.0f, 20.0f, 80.0f});
+  VARMESH_REQUIRE_SHARED(fuji, "terrain/fuji_elevation_512_f32le.raw");
+  HeightFieldReadOptions o;
+  o.raw_width = o.raw_height = 512;
+  check_error_bound(read_heightfield(fuji, o), {2.0f, 10.0f, 50.0f});
+}
+
+Query view_query(const Grid48& g, const glm::vec3& eye, const glm::vec3& target, float pixels) {
+  Camera cam;
+  cam.eye = eye;
+  cam.target = target;
+  cam.z_near = 0.5f;
+  cam.z_far = 5000.0f;
+  Query q;
+  q.criterion = Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::screen_error(cam, 600.0f, pixels)});
+  (void)g;
+  return q;
+}
+
+TEST(Grid48, ViewDependentMeshesAreCrackFree) {
+  const HeightField f = make_fractal_terrain(129, 97, 7);
+  const Grid48 g(f);
+  Grid48Front front(g);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 20; ++i) {
+    const glm::vec3 eye{u(rng) * 128.0f, u(rng) * 96.0f, 20.0f + u(rng) * 80.0f};
+    const glm::vec3 target{u(rng) * 128.0f, u(rng) * 96.0f, 0.0f};
+    extract(front, view_query(g, eye, target, 0.5f + u(rng) * 4.0f));
+    front.validate();
+    expect_conforming_cover(front.to_mesh(), 128.0, 96.0);
+  }
+}
+
+TEST(Grid48, UpdateFromAnyEarlierFrontEqualsExtract) {
+  const HeightField f = make_fractal_terrain(97, 65, 8);
+  const Grid48 g(f);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  Grid48Front moving(g);
+  for (int i = 0; i < 40; ++i) {
+    const glm::vec3 eye{u(rng) * 96.0f, u(rng) * 64.0f, 10.0f + u(rng) * 60.0f};
+    const glm::vec3 target{u(rng) * 96.0f, u(rng) * 64.0f, 0.0f};
+    Query q = view_query(g, eye, target, 0.5f + u(rng) * 3.0f);
+    if (i % 3 == 1) q.triangle_budget = 200 + static_cast<std::size_t>(u(rng) * 3000.0f);
+    update(moving, q);
+    moving.validate();
+    Grid48Front fresh(g);
+    extract(fresh, q);
+    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "step " << i;
+    for (Index p = 0; p < g.num_points(); ++p)
+      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "step " << i << " point " << p;
+    if (q.triangle_budget) EXPECT_LE(fresh.num_faces(), q.triangle_budget);
+  }
+}
+
+TEST(Grid48, RandomRefineCoarsenWalksKeepTheFrontValid) {
+  const HeightField f = make_fractal_terrain(33, 33, 9);
+  const Grid48 g(f);
+  Grid48Front front(g);
+  std::mt19937 rng(13);
+  std::vector<Index> nodes;
+  for (Index p = 0; p < g.num_points(); ++p)
+    if (g.is_node(p)) nodes.push_back(p);
+  for (int step = 0; step < 10000; ++step) {
+    const Index p = nodes[rng() % nodes.size()];
+    if (rng() % 2) {
+      front.refine(p);
+    } else if (front.is_coarsenable(p)) {
+      front.coarsen_one(p);
+    }
+    if (step % 50 == 0) {
+      front.validate();
+      expect_conforming_cover(front.to_mesh(), 32.0, 32.0);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace varmesh

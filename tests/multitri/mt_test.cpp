@@ -1,1 +1,194 @@
+// MtBuilder's checks of the Multi-Triangulation definition, and the renumbering it does.
 #include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "multitri/errors.hpp"
+#include "multitri/mt.hpp"
+
+namespace varmesh {
+namespace {
+
+// A unit square split by its diagonal (base), one split node on the diagonal, one swap node on an edge of
+// the split image is impossible (different edges), so: square, split of the diagonal.
+struct Square {
+  MtBuilder b;
+  VertexId v0, v1, v2, v3, m;
+  FaceId t0, t1, c[4];
+  Square() {
+    v0 = b.add_vertex({0, 0, 0});
+    v1 = b.add_vertex({1, 0, 0});
+    v2 = b.add_vertex({1, 1, 0});
+    v3 = b.add_vertex({0, 1, 0});
+    m = b.add_vertex({0.5f, 0.5f, 0.25f});
+    t0 = b.add_face(v0, v1, v2);
+    t1 = b.add_face(v0, v2, v3);
+    c[0] = b.add_face(m, v0, v1);
+    c[1] = b.add_face(m, v1, v2);
+    c[2] = b.add_face(m, v2, v3);
+    c[3] = b.add_face(m, v3, v0);
+    const FaceId base[] = {t0, t1};
+    b.set_base(base);
+  }
+};
+
+std::string message_of(MtBuilder&& b) {
+  try {
+    std::move(b).build();
+  } catch (const InvalidInput& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Mt, SplitNodeBuildsAndValidates) {
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  s.b.add_node(NodeKind::kSplit, removed, s.c, 0.25f);
+  const Mt mt = std::move(s.b).build();
+  mt.validate();
+  EXPECT_EQ(mt.num_nodes(), 2u);
+  EXPECT_EQ(mt.num_faces(), 6u);
+  EXPECT_EQ(mt.kind(1), NodeKind::kSplit);
+  EXPECT_EQ(mt.image_size(0), 2u);
+  EXPECT_EQ(mt.image_size(1), 4u);
+  ASSERT_EQ(mt.parents(1).size(), 1u);
+  EXPECT_EQ(mt.parents(1)[0], 0u);
+  EXPECT_FLOAT_EQ(mt.bound(1).error, 0.25f);
+  // The bounding sphere contains every vertex the node touches.
+  for (VertexId v = 0; v < mt.num_vertices(); ++v)
+    EXPECT_LE(glm::length(mt.position(v) - mt.bound(1).center), mt.bound(1).radius);
+}
+
+TEST(Mt, SwapNodeIsAccepted) {
+  Square s;
+  const FaceId a = s.b.add_face(s.v0, s.v1, s.v3), b2 = s.b.add_face(s.v1, s.v2, s.v3);
+  const FaceId removed[] = {s.t0, s.t1}, created[] = {a, b2};
+  s.b.add_node(NodeKind::kSwap, removed, created, 0.0f);
+  // c[] faces were added but are created by nobody: the builder must say so.
+  EXPECT_NE(message_of(std::move(s.b)).find("created by no node"), std::string::npos);
+}
+
+TEST(Mt, SwapAloneBuilds) {
+  MtBuilder b;
+  const VertexId v0 = b.add_vertex({0, 0, 0}), v1 = b.add_vertex({1, 0, 0}), v2 = b.add_vertex({1, 1, 0}),
+                 v3 = b.add_vertex({0, 1, 0});
+  const FaceId t0 = b.add_face(v0, v1, v2), t1 = b.add_face(v0, v2, v3);
+  const FaceId s0 = b.add_face(v0, v1, v3), s1 = b.add_face(v1, v2, v3);
+  const FaceId base[] = {t0, t1}, removed[] = {t0, t1}, created[] = {s0, s1};
+  b.set_base(base);
+  b.add_node(NodeKind::kSwap, removed, created, 0.0f);
+  const Mt mt = std::move(b).build();
+  mt.validate();
+  EXPECT_EQ(mt.kind(1), NodeKind::kSwap);
+}
+
+TEST(Mt, RejectsFaceRemovedTwice) {
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  s.b.add_node(NodeKind::kSplit, removed, s.c, 0.0f);
+  const FaceId again[] = {s.t0};
+  const FaceId extra = s.b.add_face(s.v0, s.v1, s.m);
+  const FaceId created[] = {extra};
+  s.b.add_node(NodeKind::kGeneric, again, created, 0.0f);
+  const std::string msg = message_of(std::move(s.b));
+  EXPECT_NE(msg.find("node 2"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("already removed"), std::string::npos) << msg;
+}
+
+TEST(Mt, RejectsFaceCreatedTwice) {
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  s.b.add_node(NodeKind::kSplit, removed, s.c, 0.0f);
+  const FaceId r2[] = {s.c[0]};
+  const FaceId c2[] = {s.c[1]};
+  s.b.add_node(NodeKind::kGeneric, r2, c2, 0.0f);
+  const std::string msg = message_of(std::move(s.b));
+  EXPECT_NE(msg.find("already created"), std::string::npos) << msg;
+}
+
+TEST(Mt, RejectsWrongSplitArity) {
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  const FaceId created[] = {s.c[0], s.c[1], s.c[2]};
+  s.b.add_node(NodeKind::kSplit, removed, created, 0.0f);
+  EXPECT_NE(message_of(std::move(s.b)).find("a split must replace"), std::string::npos);
+}
+
+TEST(Mt, RejectsBoundaryChange) {
+  // Removing t0 only and creating two faces that cover the whole square changes the boundary.
+  Square s;
+  const FaceId removed[] = {s.t0};
+  const FaceId created[] = {s.c[0], s.c[1]};
+  s.b.add_node(NodeKind::kGeneric, removed, created, 0.0f);
+  const FaceId r2[] = {s.t1};
+  const FaceId c2[] = {s.c[2], s.c[3]};
+  s.b.add_node(NodeKind::kGeneric, r2, c2, 0.0f);
+  const std::string msg = message_of(std::move(s.b));
+  EXPECT_NE(msg.find("oriented boundary"), std::string::npos) << msg;
+}
+
+TEST(Mt, RejectsRedundantFace) {
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  s.b.add_node(NodeKind::kSplit, removed, s.c, 0.0f);
+  // A face with the same vertices as c[0] created by a swap of c[0], c[1]: redundant.
+  const FaceId dup = s.b.add_face(s.v0, s.v1, s.m);
+  const FaceId other = s.b.add_face(s.m, s.v1, s.v2);
+  const FaceId r2[] = {s.c[0], s.c[1]}, c2[] = {dup, other};
+  s.b.add_node(NodeKind::kSwap, r2, c2, 0.0f);
+  const std::string msg = message_of(std::move(s.b));
+  EXPECT_NE(msg.find("redundant"), std::string::npos) << msg;
+}
+
+TEST(Mt, RejectsCycle) {
+  // Two generic nodes that each remove a face the other creates.
+  MtBuilder b;
+  const VertexId v0 = b.add_vertex({0, 0, 0}), v1 = b.add_vertex({1, 0, 0}), v2 = b.add_vertex({0, 1, 0}),
+                 v3 = b.add_vertex({1, 1, 0}), v4 = b.add_vertex({2, 0, 0});
+  const FaceId base = b.add_face(v0, v1, v2);
+  const FaceId f1 = b.add_face(v1, v3, v2), f2 = b.add_face(v1, v4, v3);
+  const FaceId f3 = b.add_face(v0, v4, v2);
+  const FaceId bases[] = {base};
+  b.set_base(bases);
+  const FaceId r1[] = {f1}, c1[] = {f2};
+  const FaceId r2[] = {f2}, c2[] = {f1, f3};
+  b.add_node(NodeKind::kGeneric, r1, c1, 0.0f);
+  b.add_node(NodeKind::kGeneric, r2, c2, 0.0f);
+  MtBuilder::Options o;
+  o.check_geometry = false;
+  std::string msg;
+  try {
+    std::move(b).build(o);
+  } catch (const InvalidInput& e) {
+    msg = e.what();
+  }
+  EXPECT_TRUE(msg.find("cycle") != std::string::npos || msg.find("no parent") != std::string::npos) << msg;
+}
+
+TEST(Mt, RenumbersParentsFirst) {
+  // Nodes added children-first must come out parents-first, with the maps given back.
+  Square s;
+  // Second-level split of the edge v0-v1 of child c[0]... c[0] is a border face: a 1 -> 2 split.
+  const VertexId e = s.b.add_vertex({0.5f, 0.0f, 0.0f});
+  const FaceId g0 = s.b.add_face(e, s.m, s.v0), g1 = s.b.add_face(e, s.v1, s.m);
+  const FaceId r2[] = {s.c[0]}, c2[] = {g0, g1};
+  const NodeId child = s.b.add_node(NodeKind::kSplit, r2, c2, 0.0f);
+  const FaceId removed[] = {s.t0, s.t1};
+  const NodeId parent = s.b.add_node(NodeKind::kSplit, removed, s.c, 0.0f);
+  std::vector<NodeId> node_map;
+  const Mt mt = std::move(s.b).build({}, &node_map);
+  mt.validate();
+  ASSERT_EQ(node_map.size(), 3u);
+  EXPECT_EQ(node_map[1], parent);
+  EXPECT_EQ(node_map[2], child);
+  EXPECT_EQ(mt.children(1).size(), 1u);
+  // Saturation: the parent's sphere contains the child's.
+  const auto& pb = mt.bound(1);
+  const auto& cb = mt.bound(2);
+  EXPECT_LE(glm::length(cb.center - pb.center) + cb.radius, pb.radius * 1.0001f);
+}
+
+}  // namespace
+}  // namespace varmesh

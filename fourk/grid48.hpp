@@ -1,0 +1,338 @@
+#pragma once
+/// Regular 4-8 hierarchies of height fields: the hierarchy of right triangles (interleaved binary
+/// subdivision, Velho-Gomes 2000 section 5) over a grid of any size, as an implicit Multi-Triangulation.
+///
+/// Layout. The W x H samples are covered by Tx x Ty square tiles of S = 2^k cells (the lattice,
+/// (Tx*S+1) x (Ty*S+1) points; S is chosen so that the padding stays small). Each tile is two right
+/// triangles; every lattice point that is not a tile corner is the centre of one *diamond*: the two
+/// triangles (one at the lattice border) sharing the edge that point bisects. A diamond is a split node of
+/// the MT (2 faces -> 4, or 1 -> 2 on the lattice border); its parents are the diamonds centred at its
+/// triangles' apexes, its children the diamonds centred at the midpoints of its four (two) outer edges.
+/// Nodes are lattice points, so the structure needs no arcs: it is the "pointerless" 4-8 structure of
+/// section 7.2. Samples outside the grid (padding) repeat the nearest border sample; extracted meshes are
+/// clipped to the grid rectangle [0, W-1] x [0, H-1] exactly (new vertices on the clipping lines lie on
+/// mesh edges, so the clipped surface is the unclipped one restricted to the grid).
+///
+/// Bounds. Node error = the largest vertical distance between the diamond's triangles and the grid samples
+/// they cover (exact, over every sample), maximised with the children's errors (saturated). Node sphere:
+/// centred at the diamond's centre vertex, containing its corners and its children's spheres (nested).
+/// Hence every ready-made criterion is monotone, an extracted mesh whose triangles are all "fine" for
+/// object_error(e) is within e of every sample it covers, and update() equals extract().
+///
+/// Memory: 12 bytes per lattice point (height, error, radius). A front adds 1 byte per lattice point.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "multitri/bounds.hpp"
+#include "multitri/heightfield.hpp"
+#include "multitri/mt.hpp"
+#include "multitri/tri_mesh.hpp"
+#include "multitri/types.hpp"
+
+namespace varmesh {
+
+struct Grid48Options {
+  /// Largest acceptable padded-area ratio when choosing the tile size (>= 1). Larger tiles give a
+  /// coarser base mesh but more padding.
+  double max_padding = 1.15;
+  /// Force a tile size (power of two cells, 0 = automatic).
+  std::size_t tile_size = 0;
+};
+
+class Grid48 {
+ public:
+  /// Builds the hierarchy. Throws InvalidInput for grids smaller than 2 x 2, larger than 2^30 lattice
+  /// points, or with non-finite samples (naming the sample). O(samples * levels) for the exact errors.
+  explicit Grid48(const HeightField& field, const Grid48Options& options = {});
+
+  std::size_t grid_width() const noexcept { return width_; }
+  std::size_t grid_height() const noexcept { return height_; }
+  std::size_t lattice_width() const noexcept { return lw_; }
+  std::size_t lattice_height() const noexcept { return lh_; }
+  std::size_t tile_size() const noexcept { return tile_; }
+  std::size_t tiles_x() const noexcept { return tx_; }
+  std::size_t tiles_y() const noexcept { return ty_; }
+  float spacing_x() const noexcept { return sx_; }
+  float spacing_y() const noexcept { return sy_; }
+  /// Number of lattice points (node ids range over them; tile corners are not nodes).
+  std::size_t num_points() const noexcept { return lw_ * lh_; }
+  std::size_t num_nodes() const noexcept;
+  bool is_node(Index p) const noexcept;
+  /// Number of levels of the hierarchy (depth of the DAG below the source).
+  int num_levels() const noexcept { return 2 * log2_tile_; }
+  /// Level of a node: 0 for tile centres, increasing by one per binary subdivision step.
+  int level(Index p) const noexcept;
+
+  glm::vec3 position(Index p) const noexcept {
+    return {static_cast<float>(p % lw_) * sx_, static_cast<float>(p / lw_) * sy_, z_[p]};
+  }
+  float error(Index p) const noexcept { return error_[p]; }
+  float radius(Index p) const noexcept { return radius_[p]; }
+  ElementBound bound(Index p) const noexcept { return {position(p), radius_[p], error_[p], {}}; }
+
+  /// Calls fn(parent) for the one or two parents of node p (none for tile centres, whose parent is the
+  /// source).
+  template <class Fn> void for_each_parent(Index p, Fn&& fn) const;
+  /// Calls fn(child) for the two or four children of node p (none at the finest level).
+  template <class Fn> void for_each_child(Index p, Fn&& fn) const;
+  /// Faces node p removes: 2, or 1 on the lattice border.
+  int num_triangles(Index p) const noexcept;
+
+  /// Bytes held by the hierarchy's arrays.
+  std::size_t memory_bytes() const noexcept;
+  /// The same hierarchy as an explicit Mt (for tests and metrics; grows ~100 bytes per sample). Vertex v of
+  /// the Mt is lattice point v; node errors are this hierarchy's errors (not recomputed).
+  Mt to_mt() const;
+
+  /// Largest vertical distance between `mesh` (a mesh extracted from this hierarchy, in world coordinates,
+  /// covering the grid rectangle) and every grid sample, located by walking the mesh. For tests/benchmarks.
+  double max_vertical_error(const TriMesh& mesh) const;
+
+  // Internal layout helpers used by Grid48Front.
+  int log2_tile() const noexcept { return log2_tile_; }
+  bool needs_clip() const noexcept { return lw_ != width_ || lh_ != height_; }
+
+ private:
+  void compute_errors();
+  void compute_radii();
+  float sample_clamped(std::ptrdiff_t x, std::ptrdiff_t y) const noexcept;
+
+  std::size_t width_ = 0, height_ = 0;  // grid samples
+  std::size_t lw_ = 0, lh_ = 0;         // lattice points
+  std::size_t tile_ = 1, tx_ = 0, ty_ = 0;
+  int log2_tile_ = 0;
+  float sx_ = 1.0f, sy_ = 1.0f;
+  std::vector<float> z_;       // lattice heights (padding repeats the border)
+  std::vector<float> error_;   // per lattice point (0 for tile corners)
+  std::vector<float> radius_;  // per lattice point
+};
+
+/// The state of one extraction on a Grid48: which diamonds are split. Models RefinableFront (query.hpp).
+class Grid48Front {
+ public:
+  explicit Grid48Front(const Grid48& grid);
+
+  const Grid48& grid() const noexcept { return *grid_; }
+  std::size_t num_faces() const noexcept { return num_faces_; }
+  std::size_t num_refined() const noexcept { return num_refined_; }
+
+  void reset();
+  bool is_refined(Index p) const noexcept { return refined_[p] != 0; }
+  bool is_coarsenable(Index p) const noexcept;
+  ElementBound element_bound(Index p) const noexcept { return grid_->bound(p); }
+  std::uint64_t tie_key(Index p) const noexcept { return (std::uint64_t(grid_->level(p)) << 32) | p; }
+  template <class Sink> void refine(Index p, Sink&& sink);
+  void refine(Index p) { refine(p, [](Index) {}); }
+  void coarsen_one(Index p);
+  template <class Fn> void for_each_refine_candidate(Fn&& fn) const;
+  template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const;
+  template <class Fn> void for_each_child_candidate(Index p, Fn&& fn) const { grid_->for_each_child(p, fn); }
+  template <class Fn> void for_each_parent_candidate(Index p, Fn&& fn) const { grid_->for_each_parent(p, fn); }
+
+  /// The current mesh in world coordinates, clipped to the grid rectangle; vertices are shared, triangles
+  /// counter-clockwise seen from +z. `lattice_ids` (optional) gets the lattice point of each vertex
+  /// (kInvalid for vertices created by clipping).
+  TriMesh to_mesh(std::vector<Index>* lattice_ids = nullptr) const;
+  /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
+  template <class Fn> void for_each_triangle(Fn&& fn) const;
+
+  /// Throws InvalidInput if the refined set is not an order ideal or the face count is stale.
+  void validate() const;
+
+ private:
+  template <class Fn> void walk(Index apex, Index h0, Index h1, Fn& fn) const;
+  template <class Fn> void for_each_root(Fn&& fn) const;
+  const Grid48* grid_;
+  std::vector<std::uint8_t> refined_;
+  std::size_t num_faces_ = 0;
+  std::size_t num_refined_ = 0;
+  std::vector<Index> stack_;
+};
+
+// ---- inline implementation -------------------------------------------------------------------------
+
+namespace grid48_detail {
+inline int ctz(std::size_t v) noexcept { return v == 0 ? 62 : __builtin_ctzll(v); }
+}  // namespace grid48_detail
+
+inline bool Grid48::is_node(Index p) const noexcept {
+  const std::size_t x = p % lw_, y = p / lw_;
+  return (x % tile_) != 0 || (y % tile_) != 0;
+}
+
+inline int Grid48::level(Index p) const noexcept {
+  const std::size_t x = p % lw_, y = p / lw_;
+  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  const int ld = lx < ly ? lx : ly;  // log2 of the diamond size d
+  const bool square = lx == ly;      // both x/d and y/d odd
+  return 2 * (log2_tile_ - ld) + (square ? 0 : 1) - 2;
+}
+
+template <class Fn>
+void Grid48::for_each_parent(Index p, Fn&& fn) const {
+  const std::ptrdiff_t x = static_cast<std::ptrdiff_t>(p % lw_), y = static_cast<std::ptrdiff_t>(p / lw_);
+  const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+  const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
+  if (lx == ly) {
+    // Square diamond: parents are the two corners off its diagonal (edge diamonds of size 2d); tile
+    // centres hang from the source.
+    const std::ptrdiff_t d = std::ptrdiff_t(1) << lx;
+    if (2 * d == static_cast<std::ptrdiff_t>(tile_)) return;
+    // The diagonal runs through the corner whose coordinates are odd multiples of 2d.
+    const std::ptrdiff_t cx = ((x - d) / (2 * d)) % 2 != 0 ? x - d : x + d;
+    const std::ptrdiff_t cy = ((y - d) / (2 * d)) % 2 != 0 ? y - d : y + d;
+    const std::ptrdiff_t ox = 2 * x - cx, oy = 2 * y - cy;
+    fn(static_cast<Index>(cy * w + ox));
+    fn(static_cast<Index>(oy * w + cx));
+  } else {
+    const std::ptrdiff_t d = std::ptrdiff_t(1) << (lx < ly ? lx : ly);
+    if (lx < ly) {  // x/d odd: horizontal edge, apexes above and below
+      if (y - d >= 0) fn(static_cast<Index>((y - d) * w + x));
+      if (y + d < h) fn(static_cast<Index>((y + d) * w + x));
+    } else {  // vertical edge, apexes left and right
+      if (x - d >= 0) fn(static_cast<Index>(y * w + x - d));
+      if (x + d < w) fn(static_cast<Index>(y * w + x + d));
+    }
+  }
+}
+
+template <class Fn>
+void Grid48::for_each_child(Index p, Fn&& fn) const {
+  const std::ptrdiff_t x = static_cast<std::ptrdiff_t>(p % lw_), y = static_cast<std::ptrdiff_t>(p / lw_);
+  const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+  const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
+  if (lx == ly) {  // square diamond of size d: children are the midpoints of the square's sides
+    const std::ptrdiff_t d = std::ptrdiff_t(1) << lx;
+    fn(static_cast<Index>(y * w + x - d));
+    fn(static_cast<Index>(y * w + x + d));
+    fn(static_cast<Index>((y - d) * w + x));
+    fn(static_cast<Index>((y + d) * w + x));
+  } else {  // edge diamond of size d: children are square diamonds of size d/2 around it
+    const int ld = lx < ly ? lx : ly;
+    if (ld == 0) return;
+    const std::ptrdiff_t e = std::ptrdiff_t(1) << (ld - 1);
+    for (int sy = -1; sy <= 1; sy += 2)
+      for (int sx = -1; sx <= 1; sx += 2) {
+        const std::ptrdiff_t cx = x + sx * e, cy = y + sy * e;
+        if (cx >= 0 && cx < w && cy >= 0 && cy < h) fn(static_cast<Index>(cy * w + cx));
+      }
+  }
+}
+
+inline int Grid48::num_triangles(Index p) const noexcept {
+  int n = 0;
+  const std::size_t x = p % lw_, y = p / lw_;
+  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  if (lx == ly) return 2;
+  const std::size_t d = std::size_t(1) << (lx < ly ? lx : ly);
+  if (lx < ly) {
+    n += y >= d;
+    n += y + d < lh_;
+  } else {
+    n += x >= d;
+    n += x + d < lw_;
+  }
+  return n;
+}
+
+inline bool Grid48Front::is_coarsenable(Index p) const noexcept {
+  if (!refined_[p]) return false;
+  bool ok = true;
+  grid_->for_each_child(p, [&](Index c) { ok = ok && !refined_[c]; });
+  return ok;
+}
+
+template <class Sink>
+void Grid48Front::refine(Index p, Sink&& sink) {
+  if (refined_[p]) return;
+  stack_.clear();
+  stack_.push_back(p);
+  while (!stack_.empty()) {
+    const Index t = stack_.back();
+    if (refined_[t]) {
+      stack_.pop_back();
+      continue;
+    }
+    bool pushed = false;
+    grid_->for_each_parent(t, [&](Index q) {
+      if (!refined_[q]) {
+        stack_.push_back(q);
+        pushed = true;
+      }
+    });
+    if (!pushed) {
+      stack_.pop_back();
+      refined_[t] = 1;
+      ++num_refined_;
+      num_faces_ += static_cast<std::size_t>(grid_->num_triangles(t));
+      sink(t);
+    }
+  }
+}
+
+template <class Fn>
+void Grid48Front::for_each_root(Fn&& fn) const {
+  // Each tile: two triangles sharing the tile diagonal, which runs through the tile corner whose
+  // coordinates are odd multiples of S (the 4-8 pattern of alternating diagonals).
+  const std::size_t s = grid_->tile_size(), w = grid_->lattice_width();
+  for (std::size_t ty = 0; ty < grid_->tiles_y(); ++ty)
+    for (std::size_t tx = 0; tx < grid_->tiles_x(); ++tx) {
+      const std::size_t x0 = tx * s, y0 = ty * s, x1 = x0 + s, y1 = y0 + s;
+      const Index a = static_cast<Index>(y0 * w + x0), b = static_cast<Index>(y0 * w + x1);
+      const Index c = static_cast<Index>(y1 * w + x1), d = static_cast<Index>(y1 * w + x0);
+      if ((tx + ty) % 2 == 0) {  // diagonal a-c
+        fn(b, c, a);
+        fn(d, a, c);
+      } else {  // diagonal b-d
+        fn(a, b, d);
+        fn(c, d, b);
+      }
+    }
+}
+
+template <class Fn>
+void Grid48Front::walk(Index apex, Index h0, Index h1, Fn& fn) const {
+  // Triangle (apex, h0, h1), counter-clockwise, hypotenuse h0-h1. Its diamond is the hypotenuse midpoint
+  // when that is a lattice point.
+  const std::size_t w = grid_->lattice_width();
+  const std::size_t x0 = h0 % w, y0 = h0 / w, x1 = h1 % w, y1 = h1 / w;
+  if (((x0 + x1) | (y0 + y1)) & 1u) {
+    fn(apex, h0, h1);
+    return;
+  }
+  const Index m = static_cast<Index>(((y0 + y1) / 2) * w + (x0 + x1) / 2);
+  if (!refined_[m]) {
+    fn(apex, h0, h1);
+    return;
+  }
+  walk(m, apex, h0, fn);
+  walk(m, h1, apex, fn);
+}
+
+template <class Fn>
+void Grid48Front::for_each_triangle(Fn&& fn) const {
+  for_each_root([&](Index a, Index b, Index c) { walk(a, b, c, fn); });
+}
+
+template <class Fn>
+void Grid48Front::for_each_refine_candidate(Fn&& fn) const {
+  const std::size_t w = grid_->lattice_width();
+  for_each_triangle([&](Index, Index h0, Index h1) {
+    const std::size_t x0 = h0 % w, y0 = h0 / w, x1 = h1 % w, y1 = h1 / w;
+    if (((x0 + x1) | (y0 + y1)) & 1u) return;
+    fn(static_cast<Index>(((y0 + y1) / 2) * w + (x0 + x1) / 2));
+  });
+}
+
+template <class Fn>
+void Grid48Front::for_each_coarsen_candidate(Fn&& fn) const {
+  // A coarsenable diamond's four children are unrefined, so its centre is the apex of current triangles.
+  for_each_triangle([&](Index apex, Index, Index) {
+    if (grid_->is_node(apex) && is_coarsenable(apex)) fn(apex);
+  });
+}
+
+}  // namespace varmesh

@@ -1,0 +1,143 @@
+#pragma once
+/// A front on an immutable Mt: the state of one extraction (which nodes are applied).
+///
+/// Invariants (validate()): the applied nodes form an order ideal of the DAG containing the source (every
+/// parent of an applied node is applied); the current faces are exactly the faces created by an applied node
+/// and not removed by an applied node; the current mesh is conforming. Many fronts may share one Mt.
+///
+/// Moves: apply/undo are single legal steps (they throw InvalidInput when illegal); refine/coarsen force
+/// what they need (refining applies missing ancestors first, coarsening undoes applied descendants first).
+/// Cost: O(faces changed) per node, O(1) legality tests.
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "multitri/mt.hpp"
+#include "multitri/tri_mesh.hpp"
+
+namespace varmesh {
+
+class MtFront {
+ public:
+  /// The coarsest front: only the source applied (the base mesh).
+  explicit MtFront(const Mt& mt);
+
+  const Mt& mt() const noexcept { return *mt_; }
+  bool is_applied(NodeId n) const noexcept { return applied_[n] != 0; }
+  bool can_apply(NodeId n) const noexcept { return !applied_[n] && missing_parents_[n] == 0; }
+  bool can_undo(NodeId n) const noexcept { return n != 0 && applied_[n] && applied_children_[n] == 0; }
+
+  void apply(NodeId n);
+  void undo(NodeId n);
+  /// Applies n after its missing ancestors; calls sink(m) for each node applied, in order. No-op if applied.
+  template <class Sink>
+  void refine(NodeId n, Sink&& sink);
+  void refine(NodeId n) { refine(n, [](NodeId) {}); }
+  /// Undoes n after its applied descendants; calls sink(m) for each node undone. No-op if not applied.
+  template <class Sink>
+  void coarsen(NodeId n, Sink&& sink);
+  void coarsen(NodeId n) { coarsen(n, [](NodeId) {}); }
+  /// Back to the base mesh.
+  void reset();
+
+  std::size_t num_faces() const noexcept { return faces_.size(); }
+  std::size_t num_applied() const noexcept { return num_applied_; }
+  std::span<const FaceId> faces() const noexcept { return faces_; }
+  bool has_face(FaceId f) const noexcept { return slot_[f] != kInvalid; }
+
+  /// The current mesh with compact vertex numbering; `face_ids` (optional) receives the Mt face of each
+  /// output face, `vertex_ids` the Mt vertex of each output vertex.
+  TriMesh to_mesh(std::vector<FaceId>* face_ids = nullptr, std::vector<VertexId>* vertex_ids = nullptr) const;
+
+  /// Throws InvalidInput naming the first violated invariant. O(nodes + faces).
+  void validate() const;
+
+  // The RefinableFront interface used by extract()/update() (query.hpp).
+  const ElementBound& element_bound(NodeId n) const noexcept { return mt_->bound(n); }
+  bool is_refined(NodeId n) const noexcept { return applied_[n] != 0; }
+  std::uint64_t tie_key(NodeId n) const noexcept { return n; }
+  template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
+    for (FaceId f : faces_)
+      if (const NodeId d = mt_->destroyer(f); d != kInvalid) fn(d);
+  }
+  template <class Fn> void for_each_child_candidate(NodeId n, Fn&& fn) const {
+    for (NodeId c : mt_->children(n)) fn(c);
+  }
+  bool is_coarsenable(NodeId n) const noexcept { return can_undo(n); }
+  template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
+    // A maximal applied node has its whole image in the front, so its faces' creators list it.
+    for (FaceId f : faces_)
+      if (const NodeId c = mt_->creator(f); can_undo(c) && mt_->image_begin(c) == f) fn(c);
+  }
+  template <class Fn> void for_each_parent_candidate(NodeId n, Fn&& fn) const {
+    for (NodeId p : mt_->parents(n)) fn(p);
+  }
+  void coarsen_one(NodeId n) { undo(n); }
+
+ private:
+  void add_face(FaceId f);
+  void remove_face(FaceId f);
+
+  const Mt* mt_;
+  std::vector<std::uint8_t> applied_;
+  std::vector<Index> missing_parents_;   // unapplied parents
+  std::vector<Index> applied_children_;  // applied children
+  std::vector<FaceId> faces_;            // current faces, unordered
+  std::vector<Index> slot_;              // position of a face in faces_, kInvalid if absent
+  std::size_t num_applied_ = 0;
+  std::vector<NodeId> stack_;
+};
+
+template <class Sink>
+void MtFront::refine(NodeId n, Sink&& sink) {
+  if (applied_[n]) return;
+  stack_.clear();
+  stack_.push_back(n);
+  while (!stack_.empty()) {
+    const NodeId t = stack_.back();
+    if (applied_[t]) {
+      stack_.pop_back();
+      continue;
+    }
+    bool pushed = false;
+    if (missing_parents_[t] != 0)
+      for (NodeId p : mt_->parents(t))
+        if (!applied_[p]) {
+          stack_.push_back(p);
+          pushed = true;
+        }
+    if (!pushed) {
+      stack_.pop_back();
+      apply(t);
+      sink(t);
+    }
+  }
+}
+
+template <class Sink>
+void MtFront::coarsen(NodeId n, Sink&& sink) {
+  if (!applied_[n] || n == 0) return;
+  stack_.clear();
+  stack_.push_back(n);
+  while (!stack_.empty()) {
+    const NodeId t = stack_.back();
+    if (!applied_[t]) {
+      stack_.pop_back();
+      continue;
+    }
+    bool pushed = false;
+    if (applied_children_[t] != 0)
+      for (NodeId c : mt_->children(t))
+        if (applied_[c]) {
+          stack_.push_back(c);
+          pushed = true;
+        }
+    if (!pushed) {
+      stack_.pop_back();
+      undo(t);
+      sink(t);
+    }
+  }
+}
+
+}  // namespace varmesh

@@ -1,0 +1,303 @@
+#pragma once
+/// The one query API of varmesh (DESIGN.md; Velho-Gomes 9.1; De Floriani, Magillo, Puppo 1998).
+///
+/// A query is an adaptation function (Criterion: is this element fine enough?), a focus set (where the
+/// function is evaluated; elsewhere stays coarse) and optional budgets. An element is *wanted* when its
+/// bound meets the focus set and the criterion says it is not fine enough.
+///
+/// - extract(front, query) starts from the coarsest state and refines every wanted element that the current
+///   mesh exposes, forcing what each refinement needs. The result is the least fixpoint: the smallest
+///   reachable state in which no exposed element is wanted. It does not depend on visiting order.
+/// - update(front, query) moves an existing front: it coarsens applied elements that are no longer wanted
+///   (only maximal ones, repeatedly), then refines like extract. When the criterion is monotone (a wanted
+///   element's ancestors are wanted: true for every ready-made criterion on nested bounds, which all varmesh
+///   builders produce) update() returns exactly the state extract() returns. For other criteria both return
+///   a conforming mesh on which no exposed element in focus is wanted, but update() may keep a finer one.
+/// - With a triangle budget, refinement is priority driven: wanted elements in decreasing priority
+///   (Criterion::priority, ties broken parents first), stopping before the first refinement that would
+///   exceed the budget; update() reaches the same state for monotone priorities. A time budget stops
+///   refinement when the time is up (the result is then conforming but depends on the machine).
+///
+/// A structure plugs in by providing a front type that models RefinableFront (below): MtFront for explicit
+/// Multi-Triangulations, Grid48Front for implicit 4-8 terrain hierarchies, the pm selectively refined mesh.
+#include <chrono>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <queue>
+#include <vector>
+
+#include "multitri/bounds.hpp"
+#include "multitri/camera.hpp"
+#include "multitri/types.hpp"
+
+namespace varmesh {
+
+/// An adaptation function over element bounds, built from ready-made leaves and combinators.
+/// is_fine() returns true when the element needs no refinement.
+class Criterion {
+ public:
+  enum class Kind : std::uint8_t {
+    kObjectError, kScreenError, kOutsideFrustum, kBackFacing, kAwayFromSilhouette, kAwayFromPoints,
+    kCustom, kAllOf, kAnyOf
+  };
+
+  /// Fine when bound.error <= max_error (object units).
+  static Criterion object_error(float max_error);
+  /// Fine when the error projected on the screen is <= max_pixels, for a perspective camera and a viewport
+  /// `viewport_height` pixels high: error * pixels_per_unit_at_distance_one / distance(eye, sphere).
+  /// Inside the sphere (distance <= 0) nothing is fine unless error is 0.
+  static Criterion screen_error(const Camera& camera, float viewport_height, float max_pixels);
+  /// Fine when the bounding sphere lies entirely outside the frustum (refine only what is visible).
+  static Criterion outside_frustum(const Frustum& frustum);
+  /// Fine when every normal of the cone faces away from `eye` at every point of the sphere.
+  static Criterion back_facing(const glm::vec3& eye);
+  /// Fine when the region is entirely front-facing or entirely back-facing as seen from `eye` (refine only
+  /// near silhouettes). Elements without normal information are never fine.
+  static Criterion away_from_silhouette(const glm::vec3& eye);
+  /// Fine when the sphere is farther than `radius` from every point (refine near feature points).
+  static Criterion away_from_points(std::vector<glm::vec3> points, float radius);
+  /// Any function of the bound: returns true when fine.
+  static Criterion custom(std::function<bool(const ElementBound&)> is_fine);
+  /// Fine when every part is fine (refine if any part asks).
+  static Criterion all_of(std::vector<Criterion> parts);
+  /// Fine when some part is fine (e.g. culled OR accurate enough).
+  static Criterion any_of(std::vector<Criterion> parts);
+
+  bool is_fine(const ElementBound& b) const;
+  /// Priority for budgeted refinement: the largest screen-space error of the screen_error leaves if any,
+  /// else the bound's object error. Monotone on nested bounds.
+  float priority(const ElementBound& b) const;
+  Kind kind() const noexcept { return kind_; }
+
+ private:
+  Kind kind_ = Kind::kObjectError;
+  float value_ = 0.0f;   // max error, max pixels, radius
+  float scale_ = 0.0f;   // pixels per unit at distance one
+  glm::vec3 point_{0.0f};
+  Frustum frustum_{};
+  std::vector<glm::vec3> points_;
+  std::function<bool(const ElementBound&)> custom_;
+  std::vector<Criterion> parts_;
+  bool has_screen_leaf() const;
+};
+
+struct Query {
+  Criterion criterion = Criterion::object_error(0.0f);
+  FocusSet focus;                   ///< empty: everywhere
+  std::size_t triangle_budget = 0;  ///< 0: no budget
+  double time_budget_ms = 0.0;      ///< 0: no budget
+
+  bool wants(const ElementBound& b) const { return focus.intersects(b.center, b.radius) && !criterion.is_fine(b); }
+};
+
+struct QueryStats {
+  std::size_t evaluated = 0;  ///< criterion evaluations
+  std::size_t refined = 0;    ///< elements refined (forced ones included)
+  std::size_t coarsened = 0;  ///< elements coarsened
+  bool budget_reached = false;
+  bool time_reached = false;
+};
+
+/// What extract()/update() need from the state of one extraction. Elements are indices. refine(e, sink)
+/// refines e and whatever it forces, calling sink(r) for each element refined; coarsen_one(e) undoes one
+/// coarsenable element. Candidates: elements whose refinement would change the current mesh
+/// (for_each_refine_candidate; for_each_child_candidate(e) lists those exposed by refining e), and
+/// refined elements that nothing refined depends on (for_each_coarsen_candidate; for_each_parent_candidate(e)
+/// lists those that may become coarsenable when e is coarsened). tie_key orders parents before children.
+template <class F>
+concept RefinableFront = requires(F& f, const F& cf, Index e, void (*fn)(Index)) {
+  { cf.element_bound(e) } -> std::convertible_to<ElementBound>;
+  { cf.is_refined(e) } -> std::convertible_to<bool>;
+  { cf.is_coarsenable(e) } -> std::convertible_to<bool>;
+  { cf.num_faces() } -> std::convertible_to<std::size_t>;
+  { cf.tie_key(e) } -> std::convertible_to<std::uint64_t>;
+  f.reset();
+  f.refine(e, fn);
+  f.coarsen_one(e);
+  cf.for_each_refine_candidate(fn);
+  cf.for_each_child_candidate(e, fn);
+  cf.for_each_coarsen_candidate(fn);
+  cf.for_each_parent_candidate(e, fn);
+};
+
+namespace detail {
+
+class Deadline {
+ public:
+  explicit Deadline(double ms)
+      : active_(ms > 0.0), end_(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                        std::chrono::duration<double, std::milli>(ms))) {}
+  bool passed() {
+    if (!active_ || (++calls_ & 63u) != 0) return false;
+    return std::chrono::steady_clock::now() >= end_;
+  }
+
+ private:
+  bool active_;
+  std::chrono::steady_clock::time_point end_;
+  std::uint32_t calls_ = 0;
+};
+
+struct Keyed {
+  float priority;
+  std::uint64_t tie;
+  Index element;
+};
+// Max-heap order: higher priority first, then smaller tie key (parents first).
+struct RefineOrder {
+  bool operator()(const Keyed& a, const Keyed& b) const {
+    return a.priority < b.priority || (a.priority == b.priority && a.tie > b.tie);
+  }
+};
+// Min-heap order on the same key: the element refined last comes out first.
+struct CoarsenOrder {
+  bool operator()(const Keyed& a, const Keyed& b) const { return RefineOrder{}(b, a); }
+};
+inline bool before(const Keyed& a, const Keyed& b) { return RefineOrder{}(b, a); }
+
+template <RefinableFront F>
+void refine_unbudgeted(F& front, const Query& q, std::vector<Index>& stack, QueryStats& stats, Deadline& deadline) {
+  while (!stack.empty()) {
+    const Index e = stack.back();
+    stack.pop_back();
+    if (front.is_refined(e)) continue;
+    ++stats.evaluated;
+    if (!q.wants(front.element_bound(e))) continue;
+    if (deadline.passed()) {
+      stats.time_reached = true;
+      return;
+    }
+    front.refine(e, [&](Index r) {
+      ++stats.refined;
+      front.for_each_child_candidate(r, [&](Index c) { stack.push_back(c); });
+    });
+  }
+}
+
+template <RefinableFront F>
+void refine_budgeted(F& front, const Query& q, std::priority_queue<Keyed, std::vector<Keyed>, RefineOrder>& heap,
+                     QueryStats& stats, Deadline& deadline) {
+  std::vector<Index> done;
+  while (!heap.empty()) {
+    const Keyed top = heap.top();
+    heap.pop();
+    if (front.is_refined(top.element)) continue;
+    if (deadline.passed()) {
+      stats.time_reached = true;
+      return;
+    }
+    done.clear();
+    front.refine(top.element, [&](Index r) { done.push_back(r); });
+    if (front.num_faces() > q.triangle_budget) {
+      for (auto it = done.rbegin(); it != done.rend(); ++it) front.coarsen_one(*it);
+      stats.budget_reached = true;
+      return;
+    }
+    stats.refined += done.size();
+    for (Index r : done)
+      front.for_each_child_candidate(r, [&](Index c) {
+        if (front.is_refined(c)) return;
+        const ElementBound& b = front.element_bound(c);
+        ++stats.evaluated;
+        if (q.wants(b)) heap.push({q.criterion.priority(b), front.tie_key(c), c});
+      });
+  }
+}
+
+}  // namespace detail
+
+/// Refines from the coarsest state (see the file comment). Returns counters.
+template <RefinableFront F>
+QueryStats extract(F& front, const Query& q) {
+  front.reset();
+  QueryStats stats;
+  detail::Deadline deadline(q.time_budget_ms);
+  if (q.triangle_budget == 0) {
+    std::vector<Index> stack;
+    front.for_each_refine_candidate([&](Index e) { stack.push_back(e); });
+    detail::refine_unbudgeted(front, q, stack, stats, deadline);
+  } else {
+    std::priority_queue<detail::Keyed, std::vector<detail::Keyed>, detail::RefineOrder> heap;
+    front.for_each_refine_candidate([&](Index e) {
+      const ElementBound& b = front.element_bound(e);
+      ++stats.evaluated;
+      if (q.wants(b)) heap.push({q.criterion.priority(b), front.tie_key(e), e});
+    });
+    detail::refine_budgeted(front, q, heap, stats, deadline);
+  }
+  return stats;
+}
+
+/// Moves an existing front to the answer of `q` (see the file comment). Returns counters.
+template <RefinableFront F>
+QueryStats update(F& front, const Query& q) {
+  QueryStats stats;
+  detail::Deadline deadline(q.time_budget_ms);
+  // 1. Coarsen maximal elements that are no longer wanted, and their parents in turn.
+  std::vector<Index> work;
+  front.for_each_coarsen_candidate([&](Index e) { work.push_back(e); });
+  while (!work.empty()) {
+    const Index e = work.back();
+    work.pop_back();
+    if (!front.is_coarsenable(e)) continue;
+    ++stats.evaluated;
+    if (q.wants(front.element_bound(e))) continue;
+    front.coarsen_one(e);
+    ++stats.coarsened;
+    front.for_each_parent_candidate(e, [&](Index p) { work.push_back(p); });
+  }
+  if (q.triangle_budget == 0) {
+    std::vector<Index> stack;
+    front.for_each_refine_candidate([&](Index e) { stack.push_back(e); });
+    detail::refine_unbudgeted(front, q, stack, stats, deadline);
+    return stats;
+  }
+  // 2. Budget: make the refined set a prefix of the priority order, fit it in the budget, then grow it.
+  using detail::Keyed;
+  std::priority_queue<Keyed, std::vector<Keyed>, detail::RefineOrder> refine_heap;
+  std::priority_queue<Keyed, std::vector<Keyed>, detail::CoarsenOrder> coarsen_heap;
+  auto key = [&](Index e) {
+    const ElementBound& b = front.element_bound(e);
+    return Keyed{q.criterion.priority(b), front.tie_key(e), e};
+  };
+  front.for_each_refine_candidate([&](Index e) {
+    ++stats.evaluated;
+    if (!front.is_refined(e) && q.wants(front.element_bound(e))) refine_heap.push(key(e));
+  });
+  front.for_each_coarsen_candidate([&](Index e) { coarsen_heap.push(key(e)); });
+  auto pop_coarsenable = [&](Keyed& out) {
+    while (!coarsen_heap.empty()) {
+      out = coarsen_heap.top();
+      coarsen_heap.pop();
+      if (front.is_coarsenable(out.element)) return true;
+    }
+    return false;
+  };
+  auto coarsen = [&](const Keyed& m) {
+    front.coarsen_one(m.element);
+    ++stats.coarsened;
+    refine_heap.push(m);  // still wanted (it survived step 1), so it is a refine candidate again
+    front.for_each_parent_candidate(m.element, [&](Index p) {
+      if (front.is_coarsenable(p)) coarsen_heap.push(key(p));
+    });
+  };
+  Keyed m{};
+  while (true) {
+    while (!refine_heap.empty() && front.is_refined(refine_heap.top().element)) refine_heap.pop();
+    const bool over = front.num_faces() > q.triangle_budget;
+    if (!over && refine_heap.empty()) break;
+    if (!pop_coarsenable(m)) break;
+    if (over || detail::before(refine_heap.top(), m)) {
+      coarsen(m);
+    } else {
+      coarsen_heap.push(m);
+      break;
+    }
+  }
+  detail::refine_budgeted(front, q, refine_heap, stats, deadline);
+  return stats;
+}
+
+}  // namespace varmesh

@@ -1,0 +1,16 @@
+#pragma once
+/// Generated height fields for tests, demos and benchmarks (no data files needed).
+#include <cstddef>
+#include <cstdint>
+
+#include "multitri/heightfield.hpp"
+
+namespace varmesh {
+
+/// Fractal terrain: fractional Brownian motion of value noise (octaves of smoothly interpolated lattice
+/// noise, each twice the frequency and `persistence` times the amplitude of the previous one) with a ridge
+/// transform. Heights in [0, amplitude]; deterministic for a seed; any size. Spacing 1.
+HeightField make_fractal_terrain(std::size_t width, std::size_t height, std::uint32_t seed, float amplitude = 100.0f,
+                                 int octaves = 8, float persistence = 0.5f);
+
+}  // namespace varmesh
