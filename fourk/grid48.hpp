@@ -138,6 +138,14 @@ class Grid48Front {
   TriMesh to_mesh(std::vector<Index>* lattice_ids = nullptr) const;
   /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
   template <class Fn> void for_each_triangle(Fn&& fn) const;
+  /// Calls fn(key, a, b, c) with world positions for every current triangle, unclipped (spatial queries);
+  /// key = the triangle's rank in walk order (stable while the front does not change).
+  template <class Fn> void for_each_face_geometry(Fn&& fn) const {
+    Index key = 0;
+    for_each_triangle([&](Index a, Index b, Index c) {
+      fn(key++, grid_->position(a), grid_->position(b), grid_->position(c));
+    });
+  }
 
   /// Throws InvalidInput if the refined set is not an order ideal or the face count is stale.
   void validate() const;

@@ -74,6 +74,14 @@ class MtFront {
   }
   void coarsen_one(NodeId n) { undo(n); }
 
+  /// Calls fn(face, a, b, c) for every current face with its corner positions (spatial queries).
+  template <class Fn> void for_each_face_geometry(Fn&& fn) const {
+    for (FaceId f : faces_) {
+      const auto v = mt_->face(f);
+      fn(f, mt_->position(v[0]), mt_->position(v[1]), mt_->position(v[2]));
+    }
+  }
+
  private:
   void add_face(FaceId f);
   void remove_face(FaceId f);
