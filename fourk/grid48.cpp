@@ -12,50 +12,6 @@
 namespace varmesh {
 namespace {
 
-struct P2 {
-  std::ptrdiff_t x, y;
-};
-
-// Largest |h - plane| over the grid samples inside the closed triangle (a, b, c) (lattice coordinates,
-// right isosceles so every edge is axis-aligned or diagonal: row intersections are integers), restricted to
-// samples with x < w, y < h. The plane interpolates the lattice heights at the corners.
-double triangle_error(const float* z, std::size_t lw, std::size_t w, std::size_t h, P2 a, P2 b, P2 c) {
-  const double za = z[a.y * static_cast<std::ptrdiff_t>(lw) + a.x];
-  const double zb = z[b.y * static_cast<std::ptrdiff_t>(lw) + b.x];
-  const double zc = z[c.y * static_cast<std::ptrdiff_t>(lw) + c.x];
-  const double e1x = double(b.x - a.x), e1y = double(b.y - a.y), e2x = double(c.x - a.x), e2y = double(c.y - a.y);
-  const double det = e1x * e2y - e2x * e1y;
-  const double gx = ((zb - za) * e2y - (zc - za) * e1y) / det;
-  const double gy = ((zc - za) * e1x - (zb - za) * e2x) / det;
-  const std::ptrdiff_t ymin = std::min({a.y, b.y, c.y});
-  const std::ptrdiff_t ymax = std::min<std::ptrdiff_t>(std::max({a.y, b.y, c.y}), static_cast<std::ptrdiff_t>(h) - 1);
-  const std::array<P2, 3> v{a, b, c};
-  double worst = 0.0;
-  for (std::ptrdiff_t y = ymin; y <= ymax; ++y) {
-    std::ptrdiff_t lo = PTRDIFF_MAX, hi = PTRDIFF_MIN;
-    for (int k = 0; k < 3; ++k) {
-      const P2 p = v[k], q = v[(k + 1) % 3];
-      if (y < std::min(p.y, q.y) || y > std::max(p.y, q.y)) continue;
-      if (p.y == q.y) {
-        lo = std::min({lo, p.x, q.x});
-        hi = std::max({hi, p.x, q.x});
-      } else {
-        const std::ptrdiff_t x = p.x + (y - p.y) * (q.x - p.x) / (q.y - p.y);
-        lo = std::min(lo, x);
-        hi = std::max(hi, x);
-      }
-    }
-    hi = std::min<std::ptrdiff_t>(hi, static_cast<std::ptrdiff_t>(w) - 1);
-    const float* row = z + y * static_cast<std::ptrdiff_t>(lw);
-    const double base = za + gy * double(y - a.y) - gx * double(a.x);
-    for (std::ptrdiff_t x = lo; x <= hi; ++x) {
-      const double d = std::abs(double(row[x]) - (base + gx * double(x)));
-      worst = std::max(worst, d);
-    }
-  }
-  return worst;
-}
-
 float round_up(double v) {
   float f = static_cast<float>(v);
   if (static_cast<double>(f) < v) f = std::nextafter(f, 3.0e38f);
@@ -95,14 +51,128 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
   std::tie(tx_, ty_) = padded(s);
   lw_ = tx_ * s + 1;
   lh_ = ty_ * s + 1;
+  row_of_ = FastDivider(static_cast<std::uint32_t>(lw_));
   if (double(lw_) * double(lh_) > double(1u << 30)) throw InvalidInput("Grid48: grid too large (more than 2^30 lattice points)");
   z_.resize(lw_ * lh_);
   for (std::size_t y = 0; y < lh_; ++y) {
     const std::size_t yy = std::min(y, height_ - 1);
     for (std::size_t x = 0; x < lw_; ++x) z_[y * lw_ + x] = field.z[yy * width_ + std::min(x, width_ - 1)];
   }
-  compute_errors();
-  compute_radii();
+  if (options.exact_errors) {
+    compute_errors();
+    compute_radii();
+  } else {
+    compute_bounds_fast();
+  }
+}
+
+// Bottom-up error bounds (signed residual ranges) and nested radii in one finest-first pass.
+//
+// For a triangle T split at the midpoint m of its hypotenuse (b, c) into children c0, c1: over a child,
+// plane_child - plane_T is linear, 0 at the child's two corners shared with T and
+// delta = h(m) - (h(b) + h(c)) / 2 at m, so it lies between min(0, delta) and max(0, delta). Hence the
+// residual h - plane_T over T lies in [min over children of (rmin_child + min(0, delta)),
+// max over children of (rmax_child + max(0, delta))]: a true bound that costs O(1) per triangle. Finest
+// triangles have all their samples at their corners: range [0, 0]; triangles with no grid sample (in the
+// padding) have an empty range. Triangles are stored as (diamond, side): side 0 is the half whose apex is
+// left of the centre (or below it, on a vertical line), side 1 the other.
+void Grid48::compute_bounds_fast() {
+  const std::size_t n = lw_ * lh_;
+  error_.assign(n, 0.0f);
+  radius_.assign(n, 0.0f);
+  std::vector<float> rmax(2 * n, -3.0e38f), rmin(2 * n, 3.0e38f);  // empty ranges by default
+  const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
+  const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
+  const float* z = z_.data();
+  auto in_grid = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return x <= last_x && y <= last_y; };
+  // Range of the child triangle with apex (px, py) and hypotenuse (ax, ay)-(bx, by).
+  auto child_range = [&](std::ptrdiff_t px, std::ptrdiff_t py, std::ptrdiff_t ax, std::ptrdiff_t ay, std::ptrdiff_t bx,
+                         std::ptrdiff_t by, float& lo, float& hi) {
+    const std::ptrdiff_t sx = ax + bx, sy = ay + by;
+    if (((sx | sy) & 1) != 0) {  // finest: samples are the corners
+      if (in_grid(px, py) || in_grid(ax, ay) || in_grid(bx, by)) {
+        lo = 0.0f;
+        hi = 0.0f;
+      } else {
+        lo = 3.0e38f;
+        hi = -3.0e38f;
+      }
+      return;
+    }
+    const std::ptrdiff_t mx = sx / 2, my = sy / 2;
+    const int side = (px < mx || (px == mx && py < my)) ? 0 : 1;
+    const std::size_t t = 2 * static_cast<std::size_t>(my * w + mx) + static_cast<std::size_t>(side);
+    lo = rmin[t];
+    hi = rmax[t];
+  };
+  for (int ld = 0; ld < log2_tile_; ++ld) {
+    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
+    for (int pass = 0; pass < 2; ++pass) {  // edge diamonds of size d, then square diamonds of size d
+      for (std::ptrdiff_t y = 0; y < h; y += d) {
+        const bool yodd = ((y / d) & 1) != 0;
+        if (pass == 1 && !yodd) continue;
+        const std::ptrdiff_t x_start = (pass == 1 || !yodd) ? d : 0;
+        for (std::ptrdiff_t x = x_start; x < w; x += 2 * d) {
+          const std::size_t p = static_cast<std::size_t>(y * w + x);
+          // The diamond's corners: hypotenuse ends (b, c) and the one or two apexes.
+          std::ptrdiff_t bx, by, cx, cy, a0x, a0y, a1x, a1y;
+          if (pass == 1) {
+            const std::ptrdiff_t qx = ((x - d) / (2 * d)) % 2 != 0 ? x - d : x + d;
+            const std::ptrdiff_t qy = ((y - d) / (2 * d)) % 2 != 0 ? y - d : y + d;
+            bx = qx, by = qy, cx = 2 * x - qx, cy = 2 * y - qy;
+            a0x = 2 * x - qx, a0y = qy, a1x = qx, a1y = 2 * y - qy;
+          } else if (!yodd) {  // horizontal split edge
+            bx = x - d, by = y, cx = x + d, cy = y;
+            a0x = x, a0y = y - d, a1x = x, a1y = y + d;
+          } else {  // vertical split edge
+            bx = x, by = y - d, cx = x, cy = y + d;
+            a0x = x - d, a0y = y, a1x = x + d, a1y = y;
+          }
+          const double hb = z[by * w + bx], hc = z[cy * w + cx], hm = z[p];
+          const double delta = hm - 0.5 * (hb + hc);
+          const float dlo = static_cast<float>(std::min(0.0, delta)), dhi = static_cast<float>(std::max(0.0, delta));
+          float err = 0.0f;
+          const glm::vec3 centre(float(x) * sx_, float(y) * sy_, z[p]);
+          float r = 0.0f;
+          for (int k = 0; k < 2; ++k) {
+            const std::ptrdiff_t ax = k == 0 ? a0x : a1x, ay = k == 0 ? a0y : a1y;
+            if (ax < 0 || ay < 0 || ax >= w || ay >= h) continue;
+            const int side = (ax < x || (ax == x && ay < y)) ? 0 : 1;
+            float lo0, hi0, lo1, hi1;
+            child_range(x, y, ax, ay, bx, by, lo0, hi0);
+            child_range(x, y, cx, cy, ax, ay, lo1, hi1);
+            float lo = 3.0e38f, hi = -3.0e38f;
+            if (lo0 <= hi0) {
+              lo = std::min(lo, lo0 + dlo);
+              hi = std::max(hi, hi0 + dhi);
+            }
+            if (lo1 <= hi1) {
+              lo = std::min(lo, lo1 + dlo);
+              hi = std::max(hi, hi1 + dhi);
+            }
+            if (lo <= hi) {
+              // Outward rounding keeps the float range a bound of the double computation.
+              lo = std::nextafter(lo, -3.0e38f);
+              hi = std::nextafter(hi, 3.0e38f);
+              err = std::max({err, hi, -lo});
+            }
+            rmin[2 * p + static_cast<std::size_t>(side)] = lo;
+            rmax[2 * p + static_cast<std::size_t>(side)] = hi;
+            const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, z[ay * w + ax]);
+            r = std::max(r, glm::length(apex - centre));
+          }
+          r = std::max({r, glm::length(glm::vec3(float(bx) * sx_, float(by) * sy_, float(hb)) - centre),
+                        glm::length(glm::vec3(float(cx) * sx_, float(cy) * sy_, float(hc)) - centre)});
+          for_each_child(static_cast<Index>(p), [&](Index ch) {
+            err = std::max(err, error_[ch]);
+            r = std::max(r, glm::length(position(ch) - centre) + radius_[ch]);
+          });
+          error_[p] = err;
+          radius_[p] = r * (1.0f + 1e-6f);
+        }
+      }
+    }
+  }
 }
 
 std::size_t Grid48::num_nodes() const noexcept { return lw_ * lh_ - (tx_ + 1) * (ty_ + 1); }
@@ -111,29 +181,92 @@ std::size_t Grid48::memory_bytes() const noexcept {
   return (z_.size() + error_.size() + radius_.size()) * sizeof(float);
 }
 
+namespace {
+
+// The plane through three lattice points (x, y, z), as z = base + gx * x + gy * y.
+struct PlaneXY {
+  double gx = 0.0, gy = 0.0, base = 0.0;
+  PlaneXY(double ax, double ay, double az, double bx, double by, double bz, double cx, double cy, double cz) {
+    const double e1x = bx - ax, e1y = by - ay, e2x = cx - ax, e2y = cy - ay;
+    const double det = e1x * e2y - e2x * e1y;
+    gx = ((bz - az) * e2y - (cz - az) * e1y) / det;
+    gy = ((cz - az) * e1x - (bz - az) * e2x) / det;
+    base = az - gx * ax - gy * ay;
+  }
+};
+
+// Largest |row[x] - (b + g x)| for x in [x0, x1].
+inline double span_error(const float* row, std::ptrdiff_t x0, std::ptrdiff_t x1, double b, double g) {
+  double worst = 0.0;
+  for (std::ptrdiff_t x = x0; x <= x1; ++x) {
+    const double d = double(row[x]) - (b + g * double(x));
+    worst = std::max(worst, std::abs(d));
+  }
+  return worst;
+}
+
+}  // namespace
+
+// Exact node errors. A diamond's region is scanned row by row; each row is split where it crosses the
+// diamond's split edge, and each part is compared with the plane of the triangle it lies in (samples on
+// the split edge lie on both planes' common line, so either plane gives their residual). Each level's
+// diamonds tile the lattice once, so a level costs one pass over the samples.
 void Grid48::compute_errors() {
   error_.assign(lw_ * lh_, 0.0f);
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
-  auto own_error = [&](Index p) {
-    const std::ptrdiff_t x = p % w, y = p / w;
-    const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+  const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
+  auto zat = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return double(z_[static_cast<std::size_t>(y * w + x)]); };
+  auto own_error = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
     double e = 0.0;
-    if (lx == ly) {
-      const std::ptrdiff_t d = std::ptrdiff_t(1) << lx;
+    if (square) {
+      // Diagonal from (cx, cy) (odd multiples of 2d) to the opposite corner; the off-diagonal corners are
+      // the apexes of the two halves, one on the left column (x - d), one on the right (x + d).
       const std::ptrdiff_t cx = ((x - d) / (2 * d)) % 2 != 0 ? x - d : x + d;
       const std::ptrdiff_t cy = ((y - d) / (2 * d)) % 2 != 0 ? y - d : y + d;
-      const P2 c0{cx, cy}, c1{2 * x - cx, 2 * y - cy};
-      e = std::max(triangle_error(z_.data(), lw_, width_, height_, {2 * x - cx, cy}, c0, c1),
-                   triangle_error(z_.data(), lw_, width_, height_, {cx, 2 * y - cy}, c0, c1));
+      const std::ptrdiff_t ox = 2 * x - cx, oy = 2 * y - cy;
+      // Off corners: (ox, cy) and (cx, oy).
+      const bool first_left = ox == x - d;
+      const std::ptrdiff_t lx = first_left ? ox : cx, ly = first_left ? cy : oy;
+      const std::ptrdiff_t rx = first_left ? cx : ox, ry = first_left ? oy : cy;
+      const PlaneXY left(double(lx), double(ly), zat(lx, ly), double(cx), double(cy), zat(cx, cy), double(ox), double(oy), zat(ox, oy));
+      const PlaneXY right(double(rx), double(ry), zat(rx, ry), double(cx), double(cy), zat(cx, cy), double(ox), double(oy), zat(ox, oy));
+      const std::ptrdiff_t slope = (ox - cx) * (oy - cy) > 0 ? 1 : -1;  // diagonal x - x_c = slope (y - y_c)
+      const std::ptrdiff_t y1 = std::min(y + d, last_y);
+      const std::ptrdiff_t xr = std::min(x + d, last_x);
+      for (std::ptrdiff_t yy = y - d; yy <= y1; ++yy) {
+        const std::ptrdiff_t split = x + slope * (yy - y);
+        const float* row = z_.data() + yy * w;
+        e = std::max(e, span_error(row, x - d, std::min(split, last_x), left.base + left.gy * double(yy), left.gx));
+        if (split <= last_x) e = std::max(e, span_error(row, split, xr, right.base + right.gy * double(yy), right.gx));
+      }
     } else {
-      const std::ptrdiff_t d = std::ptrdiff_t(1) << std::min(lx, ly);
-      const bool horizontal = lx < ly;
-      const P2 e0 = horizontal ? P2{x - d, y} : P2{x, y - d};
-      const P2 e1 = horizontal ? P2{x + d, y} : P2{x, y + d};
-      const P2 a0 = horizontal ? P2{x, y - d} : P2{x - d, y};
-      const P2 a1 = horizontal ? P2{x, y + d} : P2{x + d, y};
-      if (a0.x >= 0 && a0.y >= 0) e = std::max(e, triangle_error(z_.data(), lw_, width_, height_, a0, e0, e1));
-      if (a1.x < w && a1.y < h) e = std::max(e, triangle_error(z_.data(), lw_, width_, height_, a1, e0, e1));
+      const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+      const bool horizontal = lx < ly;  // split edge along x, apexes below and above
+      // Triangle apexes: (below|left) and (above|right); missing outside the lattice.
+      const std::ptrdiff_t ax0 = horizontal ? x : x - d, ay0 = horizontal ? y - d : y;
+      const std::ptrdiff_t ax1 = horizontal ? x : x + d, ay1 = horizontal ? y + d : y;
+      const std::ptrdiff_t ex0 = horizontal ? x - d : x, ey0 = horizontal ? y : y - d;
+      const std::ptrdiff_t ex1 = horizontal ? x + d : x, ey1 = horizontal ? y : y + d;
+      const bool has0 = ax0 >= 0 && ay0 >= 0, has1 = ax1 < w && ay1 < h;
+      PlaneXY p0(0, 0, 0, 1, 0, 0, 0, 1, 0), p1(0, 0, 0, 1, 0, 0, 0, 1, 0);
+      if (has0) p0 = PlaneXY(double(ax0), double(ay0), zat(ax0, ay0), double(ex0), double(ey0), zat(ex0, ey0), double(ex1), double(ey1), zat(ex1, ey1));
+      if (has1) p1 = PlaneXY(double(ax1), double(ay1), zat(ax1, ay1), double(ex0), double(ey0), zat(ex0, ey0), double(ex1), double(ey1), zat(ex1, ey1));
+      const std::ptrdiff_t y0 = std::max<std::ptrdiff_t>(y - d, 0), y1 = std::min(y + d, last_y);
+      for (std::ptrdiff_t yy = y0; yy <= y1; ++yy) {
+        const std::ptrdiff_t half = d - std::abs(yy - y);
+        const std::ptrdiff_t xa = std::max<std::ptrdiff_t>(x - half, 0), xb = std::min(x + half, last_x);
+        if (xa > xb) continue;
+        const float* row = z_.data() + yy * w;
+        if (horizontal) {
+          const PlaneXY& pl = yy < y ? p0 : p1;
+          if ((yy < y && !has0) || (yy > y && !has1)) continue;
+          const PlaneXY& use = yy == y ? (has0 ? p0 : p1) : pl;
+          e = std::max(e, span_error(row, xa, xb, use.base + use.gy * double(yy), use.gx));
+        } else {
+          if (has0 && xa <= std::min(x, xb)) e = std::max(e, span_error(row, xa, std::min(x, xb), p0.base + p0.gy * double(yy), p0.gx));
+          if (has1 && x <= xb) e = std::max(e, span_error(row, std::max(x, xa), xb, p1.base + p1.gy * double(yy), p1.gx));
+        }
+      }
     }
     return e;
   };
@@ -143,12 +276,14 @@ void Grid48::compute_errors() {
     for (int pass = 0; pass < 2; ++pass) {  // pass 0: edge diamonds of size d; pass 1: square diamonds
       for (std::ptrdiff_t y = 0; y < h; y += d) {
         const bool yodd = ((y / d) & 1) != 0;
-        for (std::ptrdiff_t x = (pass == 1 || !yodd) ? d : 0; x < w; x += 2 * d) {
-          const bool xodd = ((x / d) & 1) != 0;
-          if (pass == 0 && xodd == yodd) continue;
-          if (pass == 1 && !(xodd && yodd)) continue;
+        if (pass == 1 && !yodd) continue;
+        // Edge diamonds: x odd multiple of d on even rows, even multiple on odd rows. Squares: both odd.
+        const std::ptrdiff_t x_start = (pass == 1 || !yodd) ? d : 0;
+        for (std::ptrdiff_t x = x_start; x < w; x += 2 * d) {
           const Index p = static_cast<Index>(y * w + x);
-          double e = own_error(p);
+          if (pass == 0 && !is_node(p)) continue;
+          // Samples covered: only rows/columns inside the grid count (padding repeats the border).
+          double e = (x - d > last_x || y - d > last_y) ? 0.0 : own_error(x, y, d, pass == 1);
           float sat = round_up(e);
           for_each_child(p, [&](Index c) { sat = std::max(sat, error_[c]); });
           error_[p] = sat;
@@ -261,6 +396,70 @@ double Grid48::max_vertical_error(const TriMesh& mesh) const {
 
 Grid48Front::Grid48Front(const Grid48& grid) : grid_(&grid) { reset(); }
 
+template <class Wants>
+void Grid48Front::descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
+                          std::uint32_t cy, Wants& wants) {
+  const std::uint32_t sx = bx + cx, sy = by + cy;
+  if (((sx | sy) & 1u) != 0) return;
+  const std::uint32_t mx = sx >> 1, my = sy >> 1;
+  const Index m = my * static_cast<std::uint32_t>(grid_->lattice_width()) + mx;
+  std::uint8_t& state = refined_[m];
+  if (state == 0) state = wants(m, mx, my) ? 1 : 2;
+  if (state != 1) return;
+  descend(mx, my, ax, ay, bx, by, wants);
+  descend(mx, my, cx, cy, ax, ay, wants);
+}
+
+QueryStats Grid48Front::extract_fast(const Query& q) {
+  if (q.triangle_budget != 0 || q.time_budget_ms > 0.0) return extract(*this, q);
+  QueryStats stats;
+  std::fill(refined_.begin(), refined_.end(), std::uint8_t{0});
+  const Grid48& g = *grid_;
+  const std::uint32_t lw = static_cast<std::uint32_t>(g.lattice_width());
+  std::size_t refined = 0, evaluated = 0;
+  auto run = [&](auto& wants) {
+    for_each_root([&](Index a, Index b, Index c) { descend(a % lw, a / lw, b % lw, b / lw, c % lw, c / lw, wants); });
+  };
+  if (q.criterion.kind() == Criterion::Kind::kObjectError && q.focus.everywhere()) {
+    // The common case gets a comparison instead of a bound: error > threshold.
+    const float e = q.criterion.threshold();
+    auto wants = [&](Index m, std::uint32_t, std::uint32_t) {
+      ++evaluated;
+      const bool w = g.error(m) > e;
+      refined += w;
+      return w;
+    };
+    run(wants);
+  } else {
+    const float sx = g.spacing_x(), sy = g.spacing_y();
+    auto wants = [&](Index m, std::uint32_t mx, std::uint32_t my) {
+      ++evaluated;
+      const ElementBound b{{float(mx) * sx, float(my) * sy, g.height_at(m)}, g.radius(m), g.error(m), {}};
+      const bool w = q.wants(b);
+      refined += w;
+      return w;
+    };
+    run(wants);
+  }
+  std::size_t faces = 2 * g.tiles_x() * g.tiles_y();
+  bool ideal = true;
+  const bool check = !q.criterion.is_monotone();
+  for (Index p = 0; p < refined_.size(); ++p) {
+    if (refined_[p] == 2) {
+      refined_[p] = 0;
+    } else if (refined_[p] == 1) {
+      faces += static_cast<std::size_t>(g.num_triangles(p));
+      if (check) g.for_each_parent(p, [&](Index par) { ideal = ideal && refined_[par] != 0; });
+    }
+  }
+  if (!ideal) return extract(*this, q);  // non-monotone criterion: the generic least fixpoint
+  num_refined_ = refined;
+  num_faces_ = faces;
+  stats.refined = refined;
+  stats.evaluated = evaluated;
+  return stats;
+}
+
 void Grid48Front::reset() {
   refined_.assign(grid_->num_points(), 0);
   num_refined_ = 0;
@@ -333,16 +532,19 @@ TriMesh Grid48Front::to_mesh(std::vector<Index>* lattice_ids) const {
   TriMesh out;
   const Grid48& g = *grid_;
   const std::size_t lw = g.lattice_width();
-  std::unordered_map<Index, Index> remap;
-  remap.reserve(num_faces_);
+  std::vector<Index>& remap = vertex_of_point_;
+  if (remap.size() != g.num_points()) remap.assign(g.num_points(), kInvalid);
   std::vector<Index> ids;
+  ids.reserve(num_faces_ / 2 + 16);
+  out.positions.reserve(num_faces_ / 2 + 16);
   auto lattice_vertex = [&](Index p) {
-    auto [it, inserted] = remap.try_emplace(p, static_cast<Index>(out.positions.size()));
-    if (inserted) {
+    Index& slot = remap[p];
+    if (slot == kInvalid) {
+      slot = static_cast<Index>(out.positions.size());
       out.positions.push_back(g.position(p));
       ids.push_back(p);
     }
-    return it->second;
+    return slot;
   };
   out.indices.reserve(num_faces_ * 3);
   if (!g.needs_clip()) {
@@ -410,6 +612,8 @@ TriMesh Grid48Front::to_mesh(std::vector<Index>* lattice_ids) const {
       }
     });
   }
+  for (Index p : ids)
+    if (p != kInvalid) remap[p] = kInvalid;
   if (lattice_ids) *lattice_ids = std::move(ids);
   return out;
 }

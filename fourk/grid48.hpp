@@ -28,11 +28,27 @@
 
 #include "multitri/bounds.hpp"
 #include "multitri/heightfield.hpp"
+#include "multitri/query.hpp"
 #include "multitri/mt.hpp"
 #include "multitri/tri_mesh.hpp"
 #include "multitri/types.hpp"
 
 namespace varmesh {
+
+/// Exact division of 31-bit numerators by a fixed divisor with one multiply and one shift
+/// (Granlund and Montgomery 1994, round-up variant): lattice index -> row without a hardware divide.
+struct FastDivider {
+  std::uint64_t magic = 1ull << 32;
+  int shift = 32;
+  FastDivider() = default;
+  explicit FastDivider(std::uint32_t d) {
+    int l = 0;
+    while ((std::uint64_t(1) << l) < d) ++l;
+    shift = 32 + l;
+    magic = ((std::uint64_t(1) << shift) + d - 1) / d;
+  }
+  std::uint32_t div(std::uint32_t n) const noexcept { return static_cast<std::uint32_t>((n * magic) >> shift); }
+};
 
 struct Grid48Options {
   /// Largest acceptable padded-area ratio when choosing the tile size (>= 1). Larger tiles give a
@@ -40,6 +56,10 @@ struct Grid48Options {
   double max_padding = 1.15;
   /// Force a tile size (power of two cells, 0 = automatic).
   std::size_t tile_size = 0;
+  /// Node errors: false (default) = a guaranteed upper bound computed bottom-up in O(1) per node from
+  /// signed residual ranges (fast); true = the exact largest vertical distance, found by scanning every
+  /// sample at every level (O(samples * levels), about 10x slower to build, fewest triangles per error).
+  bool exact_errors = false;
 };
 
 class Grid48 {
@@ -66,9 +86,14 @@ class Grid48 {
   /// Level of a node: 0 for tile centres, increasing by one per binary subdivision step.
   int level(Index p) const noexcept;
 
+  /// Column and row of lattice point p.
+  std::uint32_t px(Index p) const noexcept { return p - py(p) * static_cast<std::uint32_t>(lw_); }
+  std::uint32_t py(Index p) const noexcept { return row_of_.div(p); }
   glm::vec3 position(Index p) const noexcept {
-    return {static_cast<float>(p % lw_) * sx_, static_cast<float>(p / lw_) * sy_, z_[p]};
+    const std::uint32_t y = py(p), x = p - y * static_cast<std::uint32_t>(lw_);
+    return {static_cast<float>(x) * sx_, static_cast<float>(y) * sy_, z_[p]};
   }
+  float height_at(Index p) const noexcept { return z_[p]; }
   float error(Index p) const noexcept { return error_[p]; }
   float radius(Index p) const noexcept { return radius_[p]; }
   ElementBound bound(Index p) const noexcept { return {position(p), radius_[p], error_[p], {}}; }
@@ -98,6 +123,7 @@ class Grid48 {
  private:
   void compute_errors();
   void compute_radii();
+  void compute_bounds_fast();
   float sample_clamped(std::ptrdiff_t x, std::ptrdiff_t y) const noexcept;
 
   std::size_t width_ = 0, height_ = 0;  // grid samples
@@ -105,6 +131,7 @@ class Grid48 {
   std::size_t tile_ = 1, tx_ = 0, ty_ = 0;
   int log2_tile_ = 0;
   float sx_ = 1.0f, sy_ = 1.0f;
+  FastDivider row_of_;
   std::vector<float> z_;       // lattice heights (padding repeats the border)
   std::vector<float> error_;   // per lattice point (0 for tile corners)
   std::vector<float> radius_;  // per lattice point
@@ -136,6 +163,12 @@ class Grid48Front {
   /// counter-clockwise seen from +z. `lattice_ids` (optional) gets the lattice point of each vertex
   /// (kInvalid for vertices created by clipping).
   TriMesh to_mesh(std::vector<Index>* lattice_ids = nullptr) const;
+
+  /// extract() for queries without budgets, by one recursive descent over the triangles (no candidate
+  /// stack). For monotone criteria this is the least fixpoint extract() computes; if the descent finds a
+  /// refined diamond whose parent is not refined (a non-monotone criterion), it falls back to the generic
+  /// algorithm, so the result is always the same as extract(). Queries with budgets go to extract().
+  QueryStats extract_fast(const Query& q);
   /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
   template <class Fn> void for_each_triangle(Fn&& fn) const;
   /// Calls fn(key, a, b, c) with world positions for every current triangle, unclipped (spatial queries);
@@ -151,10 +184,16 @@ class Grid48Front {
   void validate() const;
 
  private:
-  template <class Fn> void walk(Index apex, Index h0, Index h1, Fn& fn) const;
+  template <class Fn> void walk(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
+                                std::uint32_t cy, Fn& fn) const;
   template <class Fn> void for_each_root(Fn&& fn) const;
+  template <class Wants>
+  void descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
+               std::uint32_t cy, Wants& wants);
   const Grid48* grid_;
+  // 0: not refined; 1: refined. During extract_fast, 2 marks "evaluated, not wanted".
   std::vector<std::uint8_t> refined_;
+  mutable std::vector<Index> vertex_of_point_;  // to_mesh scratch, all kInvalid between calls
   std::size_t num_faces_ = 0;
   std::size_t num_refined_ = 0;
   std::vector<Index> stack_;
@@ -167,12 +206,12 @@ inline int ctz(std::size_t v) noexcept { return v == 0 ? 62 : __builtin_ctzll(v)
 }  // namespace grid48_detail
 
 inline bool Grid48::is_node(Index p) const noexcept {
-  const std::size_t x = p % lw_, y = p / lw_;
+  const std::size_t y = py(p), x = p - y * lw_;
   return (x % tile_) != 0 || (y % tile_) != 0;
 }
 
 inline int Grid48::level(Index p) const noexcept {
-  const std::size_t x = p % lw_, y = p / lw_;
+  const std::size_t y = py(p), x = p - y * lw_;
   const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
   const int ld = lx < ly ? lx : ly;  // log2 of the diamond size d
   const bool square = lx == ly;      // both x/d and y/d odd
@@ -181,7 +220,7 @@ inline int Grid48::level(Index p) const noexcept {
 
 template <class Fn>
 void Grid48::for_each_parent(Index p, Fn&& fn) const {
-  const std::ptrdiff_t x = static_cast<std::ptrdiff_t>(p % lw_), y = static_cast<std::ptrdiff_t>(p / lw_);
+  const std::ptrdiff_t y = static_cast<std::ptrdiff_t>(py(p)), x = static_cast<std::ptrdiff_t>(p) - y * static_cast<std::ptrdiff_t>(lw_);
   const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
   if (lx == ly) {
@@ -209,7 +248,7 @@ void Grid48::for_each_parent(Index p, Fn&& fn) const {
 
 template <class Fn>
 void Grid48::for_each_child(Index p, Fn&& fn) const {
-  const std::ptrdiff_t x = static_cast<std::ptrdiff_t>(p % lw_), y = static_cast<std::ptrdiff_t>(p / lw_);
+  const std::ptrdiff_t y = static_cast<std::ptrdiff_t>(py(p)), x = static_cast<std::ptrdiff_t>(p) - y * static_cast<std::ptrdiff_t>(lw_);
   const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
   if (lx == ly) {  // square diamond of size d: children are the midpoints of the square's sides
@@ -232,7 +271,7 @@ void Grid48::for_each_child(Index p, Fn&& fn) const {
 
 inline int Grid48::num_triangles(Index p) const noexcept {
   int n = 0;
-  const std::size_t x = p % lw_, y = p / lw_;
+  const std::size_t y = py(p), x = p - y * lw_;
   const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
   if (lx == ly) return 2;
   const std::size_t d = std::size_t(1) << (lx < ly ? lx : ly);
@@ -302,36 +341,39 @@ void Grid48Front::for_each_root(Fn&& fn) const {
 }
 
 template <class Fn>
-void Grid48Front::walk(Index apex, Index h0, Index h1, Fn& fn) const {
-  // Triangle (apex, h0, h1), counter-clockwise, hypotenuse h0-h1. Its diamond is the hypotenuse midpoint
-  // when that is a lattice point.
-  const std::size_t w = grid_->lattice_width();
-  const std::size_t x0 = h0 % w, y0 = h0 / w, x1 = h1 % w, y1 = h1 / w;
-  if (((x0 + x1) | (y0 + y1)) & 1u) {
-    fn(apex, h0, h1);
-    return;
+void Grid48Front::walk(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
+                       std::uint32_t cy, Fn& fn) const {
+  // Triangle (a, b, c), counter-clockwise, hypotenuse b-c. Its diamond is the hypotenuse midpoint when that
+  // is a lattice point. Coordinates travel with the recursion: no division per triangle.
+  const std::uint32_t lw = static_cast<std::uint32_t>(grid_->lattice_width());
+  const std::uint32_t sx = bx + cx, sy = by + cy;
+  if (((sx | sy) & 1u) == 0) {
+    const std::uint32_t mx = sx >> 1, my = sy >> 1;
+    if (refined_[my * lw + mx]) {
+      walk(mx, my, ax, ay, bx, by, fn);
+      walk(mx, my, cx, cy, ax, ay, fn);
+      return;
+    }
   }
-  const Index m = static_cast<Index>(((y0 + y1) / 2) * w + (x0 + x1) / 2);
-  if (!refined_[m]) {
-    fn(apex, h0, h1);
-    return;
-  }
-  walk(m, apex, h0, fn);
-  walk(m, h1, apex, fn);
+  fn(ay * lw + ax, by * lw + bx, cy * lw + cx);
 }
 
 template <class Fn>
 void Grid48Front::for_each_triangle(Fn&& fn) const {
-  for_each_root([&](Index a, Index b, Index c) { walk(a, b, c, fn); });
+  const std::uint32_t lw = static_cast<std::uint32_t>(grid_->lattice_width());
+  for_each_root([&](Index a, Index b, Index c) {
+    walk(a % lw, a / lw, b % lw, b / lw, c % lw, c / lw, fn);
+  });
 }
 
 template <class Fn>
 void Grid48Front::for_each_refine_candidate(Fn&& fn) const {
-  const std::size_t w = grid_->lattice_width();
+  const std::uint32_t lw = static_cast<std::uint32_t>(grid_->lattice_width());
   for_each_triangle([&](Index, Index h0, Index h1) {
-    const std::size_t x0 = h0 % w, y0 = h0 / w, x1 = h1 % w, y1 = h1 / w;
+    const std::uint32_t y0 = grid_->py(h0), y1 = grid_->py(h1);
+    const std::uint32_t x0 = h0 - y0 * lw, x1 = h1 - y1 * lw;
     if (((x0 + x1) | (y0 + y1)) & 1u) return;
-    fn(static_cast<Index>(((y0 + y1) / 2) * w + (x0 + x1) / 2));
+    fn(static_cast<Index>(((y0 + y1) / 2) * lw + (x0 + x1) / 2));
   });
 }
 

@@ -137,6 +137,13 @@ bool Criterion::is_fine(const ElementBound& b) const {
   return true;
 }
 
+bool Criterion::is_monotone() const {
+  if (kind_ == Kind::kCustom) return false;
+  for (const auto& p : parts_)
+    if (!p.is_monotone()) return false;
+  return true;
+}
+
 bool Criterion::has_screen_leaf() const {
   if (kind_ == Kind::kScreenError) return true;
   for (const auto& p : parts_)

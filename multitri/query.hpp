@@ -70,6 +70,10 @@ class Criterion {
   /// else the bound's object error. Monotone on nested bounds.
   float priority(const ElementBound& b) const;
   Kind kind() const noexcept { return kind_; }
+  /// True when no custom() leaf is involved: every ready-made leaf is monotone on nested bounds.
+  bool is_monotone() const;
+  /// The threshold of an object_error leaf (for fast paths); meaningful only when kind() == kObjectError.
+  float threshold() const noexcept { return value_; }
 
  private:
   Kind kind_ = Kind::kObjectError;
