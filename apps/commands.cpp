@@ -1,7 +1,251 @@
 #include "apps/commands.hpp"
 
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "apps/cli_util.hpp"
+#include "apps/demo.hpp"
+#include "apps/render.hpp"
+#include "fourk/grid48.hpp"
+#include "multitri/errors.hpp"
+#include "multitri/heightfield.hpp"
+#include "multitri/image.hpp"
+#include "multitri/mesh_io.hpp"
+#include "multitri/mesh_report.hpp"
+#include "multitri/query.hpp"
+
 namespace varmesh::app {
 
-int run(int, char**) { return 0; }
+std::vector<float> parse_floats(const std::string& text, const std::string& option, std::size_t count) {
+  std::vector<float> out;
+  const char* p = text.data();
+  const char* end = p + text.size();
+  while (p < end) {
+    float v = 0.0f;
+    auto [next, ec] = std::from_chars(p, end, v);
+    if (ec != std::errc() || !std::isfinite(v))
+      throw InvalidInput(option + ": '" + text + "' is not a comma-separated list of numbers");
+    out.push_back(v);
+    p = next;
+    if (p < end) {
+      if (*p != ',') throw InvalidInput(option + ": expected ',' in '" + text + "'");
+      ++p;
+    }
+  }
+  if (out.size() != count)
+    throw InvalidInput(option + ": expected " + std::to_string(count) + " numbers, got " + std::to_string(out.size()));
+  return out;
+}
+
+glm::vec3 parse_vec3(const std::string& text, const std::string& option) {
+  const auto v = parse_floats(text, option, 3);
+  return {v[0], v[1], v[2]};
+}
+
+Step::Step(const char* what, bool quiet) : what_(what), quiet_(quiet) {
+  if (!quiet_) std::fprintf(stderr, "[varmesh] %s ...\n", what_);
+}
+
+Step::~Step() {
+  const double t = watch_.ms();
+  if (!quiet_ && t > 1000.0) std::fprintf(stderr, "[varmesh] %s done in %.1f s\n", what_, t / 1000.0);
+}
+
+namespace {
+
+int cmd_info(const std::string& path) {
+  ReadInfo info;
+  const TriMesh mesh = read_mesh(path, &info);
+  const MeshReport report = analyze_mesh(mesh);
+  std::printf("%s\n%s", path.c_str(), format_report(report).c_str());
+  if (info.polygons_triangulated) std::printf("polygons triangulated: %zu\n", info.polygons_triangulated);
+  if (info.attribute_conflicts) std::printf("attribute conflicts (first kept): %zu\n", info.attribute_conflicts);
+  if (info.strip_degenerates_dropped) std::printf("degenerate strip triangles dropped: %zu\n", info.strip_degenerates_dropped);
+  return 0;
+}
+
+struct TerrainArgs {
+  std::string input, output, png, camera;
+  float error = -1.0f;
+  float pixels = 1.0f;
+  float viewport = 1080.0f;
+  std::size_t budget = 0;
+  float z_scale = 1.0f;
+  float spacing = 1.0f;
+  std::string raw_size;
+  bool terrain_rgb = false;
+  bool exact = false;
+  bool measure = false;
+  bool quiet = false;
+};
+
+int cmd_terrain(const TerrainArgs& a) {
+  if (a.error < 0.0f && a.camera.empty()) throw InvalidInput("terrain: give --error E, --camera ..., or both");
+  const std::string ext = std::filesystem::path(a.output).extension().string();
+  if (ext != ".obj" && ext != ".ply" && ext != ".off")
+    throw InvalidInput("terrain: -o must end in .obj, .ply or .off, not '" + a.output + "'");
+  HeightFieldReadOptions ro;
+  ro.decoding = a.terrain_rgb ? PixelDecoding::kTerrainRgb : PixelDecoding::kGray;
+  ro.z_scale = a.z_scale;
+  if (!a.raw_size.empty()) {
+    const auto wh = parse_floats(a.raw_size, "--raw-size", 2);
+    if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))
+      throw InvalidInput("--raw-size: expected two positive integers W,H");
+    ro.raw_width = static_cast<std::size_t>(wh[0]);
+    ro.raw_height = static_cast<std::size_t>(wh[1]);
+  }
+  HeightField field = read_heightfield(a.input, ro);
+  if (!(a.spacing > 0.0f)) throw InvalidInput("--spacing must be > 0");
+  field.spacing_x = field.spacing_y = a.spacing;
+  Grid48Options go;
+  go.exact_errors = a.exact;
+  Stopwatch build_watch;
+  const Grid48 grid(field, go);
+  const double build_ms = build_watch.ms();
+  Query q;
+  std::vector<Criterion> parts;
+  if (!a.camera.empty()) {
+    const auto c = parse_floats(a.camera, "--camera", 7);
+    Camera cam;
+    cam.eye = {c[0], c[1], c[2]};
+    cam.target = {c[3], c[4], c[5]};
+    cam.fov_y_deg = c[6];
+    if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
+    if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
+    cam.z_near = 0.1f * a.spacing;
+    cam.z_far = 1e7f;
+    parts.push_back(Criterion::outside_frustum(cam.frustum()));
+    parts.push_back(Criterion::screen_error(cam, a.viewport, a.pixels));
+  }
+  if (a.error >= 0.0f) parts.push_back(Criterion::object_error(a.error));
+  q.criterion = parts.size() == 1 ? parts[0] : Criterion::any_of(parts);
+  q.triangle_budget = a.budget;
+  Grid48Front front(grid);
+  Stopwatch extract_watch;
+  front.extract_fast(q);
+  const double extract_ms = extract_watch.ms();
+  const TriMesh mesh = front.to_mesh();
+  write_mesh(a.output, mesh);
+  std::printf("grid %zux%zu (lattice %zux%zu, tile %zu), hierarchy %.1f MB built in %.1f ms\n", field.width, field.height,
+              grid.lattice_width(), grid.lattice_height(), grid.tile_size(), double(grid.memory_bytes()) / 1e6, build_ms);
+  std::printf("extracted %zu triangles, %zu vertices in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
+              extract_ms, a.output.c_str());
+  if (a.measure) std::printf("measured max vertical error over all samples: %.6g\n", grid.max_vertical_error(mesh));
+  if (!a.png.empty()) {
+    RenderOptions o;
+    o.width = 1024;
+    o.height = 768;
+    o.height_ramp = true;
+    o.wireframe = mesh.num_faces() < 200000;
+    write_png(a.png, render_mesh(mesh, default_camera_for(mesh, 4.0f / 3.0f), o));
+  }
+  return 0;
+}
+
+struct RenderArgs {
+  std::string input, output, eye, target;
+  int width = 1024, height = 768;
+  float fov = 40.0f;
+  bool wireframe = false, flat = false, ramp = false;
+};
+
+int cmd_render(const RenderArgs& a) {
+  if (std::filesystem::path(a.output).extension() != ".png") throw InvalidInput("render: -o must end in .png");
+  const TriMesh mesh = read_mesh(a.input);
+  const float aspect = float(a.width) / float(a.height);
+  Camera cam = default_camera_for(mesh, aspect);
+  if (!a.eye.empty()) cam.eye = parse_vec3(a.eye, "--eye");
+  if (!a.target.empty()) cam.target = parse_vec3(a.target, "--target");
+  cam.fov_y_deg = a.fov;
+  if (!a.eye.empty() || !a.target.empty()) {
+    const float r = mesh.bounds().diagonal();
+    const float dist = glm::length(cam.eye - cam.target);
+    cam.z_near = std::max(1e-4f * (dist + r), dist - r);
+    cam.z_far = dist + r;
+    if (cam.z_near <= 0.0f) cam.z_near = 1e-3f * r;
+  }
+  RenderOptions o;
+  o.width = a.width;
+  o.height = a.height;
+  o.wireframe = a.wireframe;
+  o.smooth = !a.flat;
+  o.height_ramp = a.ramp;
+  write_png(a.output, render_mesh(mesh, cam, o));
+  std::printf("rendered %zu triangles -> %s\n", mesh.num_faces(), a.output.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int run(int argc, char** argv) {
+  CLI::App app{"varmesh: variable-resolution triangle meshes (Multi-Triangulations, 4-k meshes, progressive meshes)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "varmesh 0.1.0");
+
+  std::string info_path;
+  auto* info = app.add_subcommand("info", "Print the topology report of a mesh (OBJ, OFF, PLY)");
+  info->add_option("FILE", info_path, "mesh file")->required();
+
+  TerrainArgs ta;
+  auto* terrain = app.add_subcommand("terrain", "Build the 4-8 hierarchy of a height field and extract an adapted mesh");
+  terrain->add_option("HEIGHTFIELD", ta.input, "height field: .pgm, .png, .raw/.f32 (float32 LE, give --raw-size)")->required();
+  terrain->add_option("-o,--output", ta.output, "output mesh (.obj, .ply, .off)")->required();
+  terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample");
+  terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)");
+  terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)");
+  terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)");
+  terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)");
+  terrain->add_option("--z-scale", ta.z_scale, "multiply heights by this factor");
+  terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");
+  terrain->add_option("--raw-size", ta.raw_size, "W,H of a .raw/.f32 file");
+  terrain->add_flag("--terrain-rgb", ta.terrain_rgb, "decode a Mapbox Terrain-RGB PNG");
+  terrain->add_flag("--exact", ta.exact, "exact node errors (slower build, fewer triangles per error)");
+  terrain->add_flag("--measure", ta.measure, "measure the true max vertical error of the result over all samples");
+  terrain->add_option("--png", ta.png, "also render the result to this PNG");
+
+  RenderArgs ra;
+  auto* render = app.add_subcommand("render", "Render a mesh to a PNG with a small software rasterizer");
+  render->add_option("MESH", ra.input, "mesh file")->required();
+  render->add_option("-o,--output", ra.output, "output .png")->required();
+  render->add_option("--width", ra.width, "image width in pixels")->check(CLI::Range(1, 16384));
+  render->add_option("--height", ra.height, "image height in pixels")->check(CLI::Range(1, 16384));
+  render->add_option("--eye", ra.eye, "camera position x,y,z (default: a 3/4 view)");
+  render->add_option("--target", ra.target, "camera target x,y,z (default: the bounding sphere centre)");
+  render->add_option("--fov", ra.fov, "vertical field of view in degrees")->check(CLI::Range(1.0, 170.0));
+  render->add_flag("--wireframe", ra.wireframe, "draw edges");
+  render->add_flag("--flat", ra.flat, "flat shading");
+  render->add_flag("--height-ramp", ra.ramp, "colour by height (terrains)");
+
+  DemoArgs da;
+  auto* demo = app.add_subcommand("demo", "Fractal terrain: build, uniform-error and view-dependent meshes, table, OBJ + PNG");
+  demo->add_option("--out", da.out_dir, "output folder (default varmesh_demo)");
+  demo->add_option("--size", da.size, "terrain size in samples per side (default 1025)")->check(CLI::Range(17, 8193));
+  demo->add_option("--error", da.error, "uniform mesh: max vertical error (default 0.5% of the height range)");
+  demo->add_option("--pixels", da.pixels, "view-dependent mesh: screen-space error in pixels (default 1)");
+  demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain");
+  demo->add_flag("--quiet", da.quiet, "no progress on stderr");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (*info) return cmd_info(info_path);
+    if (*terrain) return cmd_terrain(ta);
+    if (*render) return cmd_render(ra);
+    if (*demo) return run_demo(da);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "varmesh: error: %s\n", e.what());
+    return 1;
+  }
+  return 2;
+}
 
 }  // namespace varmesh::app

@@ -1,0 +1,41 @@
+#pragma once
+// Small helpers shared by the subcommands: parsing "x,y,z" lists, timing, progress on stderr.
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace varmesh::app {
+
+/// Parses comma-separated numbers; throws InvalidInput naming the option on a bad list or count.
+std::vector<float> parse_floats(const std::string& text, const std::string& option, std::size_t count);
+glm::vec3 parse_vec3(const std::string& text, const std::string& option);
+
+/// Wall-clock stopwatch in milliseconds.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  double ms() const { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count(); }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// Announces a step on stderr and, when it took more than a second, how long it took.
+class Step {
+ public:
+  Step(const char* what, bool quiet);
+  ~Step();
+  Step(const Step&) = delete;
+  Step& operator=(const Step&) = delete;
+  double ms() const { return watch_.ms(); }
+
+ private:
+  const char* what_;
+  bool quiet_;
+  Stopwatch watch_;
+};
+
+}  // namespace varmesh::app
