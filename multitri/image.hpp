@@ -21,14 +21,28 @@ struct Image {
   float value(std::size_t x, std::size_t y, int c) const noexcept;
 };
 
-/// Reads a PNG (any colour type; palette expanded to RGB, bit depth < 8 expanded to 8; 16-bit kept).
-/// Throws IoError naming the file and libpng's reason.
+/// Reads a PNG (any colour type, interlaced or not; palette expanded to RGB, gray bit depth < 8 expanded to
+/// 8, a tRNS chunk expanded to an alpha channel; 16-bit kept, in native byte order in `pixels16`). Sample
+/// values are as stored (no gamma correction).
+/// Throws IoError naming the file, libpng's reason and the read position (byte offset) where decoding
+/// stopped: bad signature, truncated data, CRC errors, corrupt zlib streams, width * height above 2^28
+/// pixels ("absurd size"), or too few IDAT bytes for the claimed size. Oversized or truncated images are
+/// rejected before the pixel buffer is allocated. O(file size + pixels).
 Image read_png(const std::string& path);
 
-/// Reads a binary or ascii PGM (P5/P2) with maxval up to 65535. Throws IoError (byte offset or line).
+/// Reads a binary or ascii PGM (P5/P2) with maxval 1..65535 into a 1-channel image: bit_depth 8 when
+/// maxval <= 255, else 16 (P5 16-bit samples are big endian in the file). Samples are kept as stored, not
+/// rescaled to the full range, so Image::value() is sample / 255 or sample / 65535 whatever the maxval.
+/// Header '#' comments are allowed. Data after the raster (further images) is ignored.
+/// Throws IoError naming the file, the line (header and P2 samples) and the byte offset (P5): bad magic,
+/// bad or missing numbers, zero size, maxval 0 or > 65535, width * height above 2^28 ("absurd size", checked
+/// before allocating), truncated data, samples above maxval.
 Image read_pgm(const std::string& path);
 
-/// Writes a PNG, 8 or 16-bit as the image says. Atomic (temporary file + rename). Throws IoError.
+/// Writes a non-interlaced PNG, 8 or 16-bit as the image says, colour type from `channels`. Atomic
+/// (temporary file + rename): on failure `path` is untouched. Throws InvalidInput if the image is
+/// inconsistent (zero size, channels outside 1..4, bit_depth not 8/16, wrong buffer size) and IoError if
+/// encoding or writing fails.
 void write_png(const std::string& path, const Image& image);
 
 }  // namespace varmesh

@@ -2,18 +2,29 @@
 /// Topology report of a triangle mesh: what `varmesh info` prints.
 ///
 /// Definitions (chosen to agree with ../shared/data/tools/meshstat.py, which produced MANIFEST.md):
-/// - an edge is an unordered vertex pair used by at least one non-degenerate face; boundary edge: used by
-///   exactly 1 face; non-manifold edge: used by more than 2 faces;
-/// - boundary loops: connected cycles of boundary edges (counted as components of the boundary-edge graph,
-///   a non-manifold boundary vertex joining two loops counts once);
-/// - non-manifold vertex: a vertex whose incident faces form more than one fan (edge-connected group
-///   around it), ignoring vertices on non-manifold edges;
+/// - faces counts every face; a degenerate face (repeated index) is counted and then ignored by every other
+///   count below (its vertices may be unreferenced, its edges do not exist);
+/// - unreferenced vertex: not a corner of any non-degenerate face;
+/// - an edge is an unordered vertex pair used by at least one non-degenerate face; its face count counts
+///   every such face, duplicates included; boundary edge: used by exactly 1 face; non-manifold edge: used by
+///   more than 2 faces;
+/// - boundary loops: connected components of the graph of boundary edges (so two holes touching at a
+///   vertex count as one loop);
+/// - non-manifold vertex: a vertex whose incident faces form more than one fan, where two faces are in one
+///   fan when they are linked by a chain of faces sharing an edge at the vertex. All faces on an edge are
+///   linked, non-manifold edges included, so a vertex is not flagged because of a non-manifold edge alone
+///   (a "book" of three faces on one edge has no non-manifold vertex; a bow-tie has one);
 /// - components: connected components of the faces (sharing a vertex); unreferenced vertices do not count;
-/// - degenerate faces: faces with a repeated index; zero-area faces: faces with distinct indices but zero
-///   area (exactly collinear corners); duplicate faces: faces with the same vertex set as an earlier face
-///   (orientation ignored), counted once per extra copy;
+/// - zero-area faces: non-degenerate faces whose corners are exactly collinear (coincident corners
+///   included), decided in exact arithmetic on the float positions. meshstat.py prints no such count; the
+///   MANIFEST figure (108 for the full dragon) agrees with this exact test;
+/// - duplicate faces: non-degenerate faces with the same vertex set as an earlier face (orientation
+///   ignored), counted once per extra copy;
 /// - euler characteristic chi = V - E + F over referenced vertices, edges and non-degenerate faces;
-///   genus = (2 - chi) / 2 when the mesh is closed, connected and manifold, else -1.
+/// - closed: at least one non-degenerate face, no boundary edge and no non-manifold edge (meshstat.py calls
+///   a mesh without faces closed; here it is not);
+/// - genus = floor((2 - chi) / 2) when the mesh is closed, has one component and no non-manifold vertex,
+///   else -1.
 #include <cstddef>
 #include <string>
 
@@ -40,7 +51,11 @@ struct MeshReport {
   Box3 bounds;
 };
 
-/// O(F log F). Never throws on odd topology; throws InvalidInput only if mesh.validate() fails.
+/// Computes the report. O(V + F) plus sorting the half-edges around each vertex (O(F log F) worst case, for
+/// a hub vertex). Scratch memory about 37 F + 9 V bytes (a 64-bit key per half-edge, a union-find slot per
+/// corner and per vertex); the 871k-face dragon takes about 0.2 s.
+/// Never throws on odd topology (non-manifold, degenerate, duplicate, unreferenced, no faces); throws
+/// InvalidInput if mesh.validate() fails or the mesh has 2^32 - 1 or more corners or vertices.
 MeshReport analyze_mesh(const TriMesh& mesh);
 
 /// Multi-line human-readable form of the report (what `varmesh info` prints).
