@@ -1,1 +1,142 @@
+// The varmesh command as a user runs it: exit codes, one-line errors, no partial outputs, and results that
+// meet what was asked.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <sys/wait.h>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "fourk/grid48.hpp"
+#include "multitri/heightfield.hpp"
+#include "multitri/image.hpp"
+#include "multitri/mesh_io.hpp"
+#include "multitri/terrain_gen.hpp"
+#include "test_support.hpp"
+
+namespace varmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CmdResult {
+  int status;
+  std::string out, err;
+};
+
+CmdResult run(const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string cmd = std::string(VARMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int raw = std::system(cmd.c_str());
+  auto slurp = [](const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
+}
+
+int count_lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+TEST(Cli, HelpOnEverySubcommand) {
+  const auto dir = testing::scratch_dir("cli_help");
+  for (const char* sub : {"", "info", "terrain", "render", "demo"}) {
+    const CmdResult r = run(std::string(sub) + " --help", dir);
+    EXPECT_EQ(r.status, 0) << sub;
+    EXPECT_NE(r.out.find("Usage"), std::string::npos) << sub;
+  }
+}
+
+TEST(Cli, UnknownOptionFails) {
+  const auto dir = testing::scratch_dir("cli_unknown");
+  const CmdResult r = run("terrain --no-such-option x", dir);
+  EXPECT_NE(r.status, 0);
+}
+
+TEST(Cli, InfoReportsCountsAndMissingFileIsOneLine) {
+  const auto dir = testing::scratch_dir("cli_info");
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {5, 5, 5}};
+  m.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  write_mesh((dir / "tet.obj").string(), m);
+  CmdResult r = run((dir / "tet.obj").string(), dir);  // no subcommand: an error
+  EXPECT_NE(r.status, 0);
+  r = run("info " + (dir / "tet.obj").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("vertices"), std::string::npos);
+  EXPECT_NE(r.out.find("1 unreferenced"), std::string::npos) << r.out;
+  r = run("info " + (dir / "missing.obj").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("missing.obj"), std::string::npos);
+}
+
+TEST(Cli, TerrainMeetsTheErrorAndFailsCleanly) {
+  const auto dir = testing::scratch_dir("cli_terrain");
+  HeightField f = make_fractal_terrain(70, 45, 3, 500.0f);
+  for (float& v : f.z) v = std::round(v);
+  write_heightfield_raw((dir / "t.f32").string(), f);
+  const std::string out = (dir / "t.ply").string();
+  CmdResult r = run("terrain " + (dir / "t.f32").string() + " --raw-size 70,45 --error 3 -o " + out, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const TriMesh mesh = read_mesh(out);
+  const Grid48 g(f);
+  EXPECT_LE(g.max_vertical_error(mesh), 3.0);
+  EXPECT_GT(mesh.num_faces(), 10u);
+  // View-dependent with a budget.
+  r = run("terrain " + (dir / "t.f32").string() + " --raw-size 70,45 --camera -10,-10,300,35,22,0,50 --budget 500 -o " + out, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LE(read_mesh(out).num_faces(), 500u + 60u);  // clipping may split a few border triangles
+  // Bad inputs: a one-line error, exit 1, and no output file.
+  const std::string bad_out = (dir / "bad.obj").string();
+  std::ofstream((dir / "trunc.pgm").string()) << "P5\n10 10\n255\nabc";
+  for (const std::string& args :
+       {"terrain " + (dir / "trunc.pgm").string() + " --error 1 -o " + bad_out,
+        "terrain " + (dir / "t.f32").string() + " --raw-size 70,44 --error 1 -o " + bad_out,
+        "terrain " + (dir / "t.f32").string() + " --raw-size 70,45 --error 1 -o " + (dir / "x.txt").string(),
+        "terrain " + (dir / "t.f32").string() + " --raw-size 70,45 --camera 1,2,3 -o " + bad_out,
+        "terrain " + (dir / "t.f32").string() + " --raw-size 70,45 -o " + bad_out}) {
+    r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(bad_out)) << args;
+  }
+}
+
+TEST(Cli, RenderWritesAPngOfTheAskedSize) {
+  const auto dir = testing::scratch_dir("cli_render");
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  write_mesh((dir / "tet.off").string(), m);
+  const CmdResult r = run("render " + (dir / "tet.off").string() + " --width 120 --height 90 --wireframe -o " +
+                        (dir / "tet.png").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Image img = read_png((dir / "tet.png").string());
+  EXPECT_EQ(img.width, 120u);
+  EXPECT_EQ(img.height, 90u);
+  const CmdResult bad = run("render " + (dir / "tet.off").string() + " --width 0 -o " + (dir / "z.png").string(), dir);
+  EXPECT_NE(bad.status, 0);
+  EXPECT_FALSE(fs::exists(dir / "z.png"));
+}
+
+TEST(Cli, DemoWritesItsFilesAndTheBoundHolds) {
+  const auto dir = testing::scratch_dir("cli_demo");
+  const CmdResult r = run("demo --quiet --size 129 --out " + (dir / "out").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("bound holds"), std::string::npos) << r.out;
+  for (const char* f : {"uniform.obj", "view.obj", "uniform.png", "view_camera.png", "uniform_topdown.png", "view_topdown.png"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  EXPECT_GT(read_mesh((dir / "out" / "view.obj").string()).num_faces(), 100u);
+}
+
+}  // namespace
+}  // namespace varmesh
