@@ -455,6 +455,7 @@ QueryStats Grid48Front::extract_fast(const Query& q) {
   if (!ideal) return extract(*this, q);  // non-monotone criterion: the generic least fixpoint
   num_refined_ = refined;
   num_faces_ = faces;
+  sets_valid_ = false;
   stats.refined = refined;
   stats.evaluated = evaluated;
   return stats;
@@ -464,6 +465,55 @@ void Grid48Front::reset() {
   refined_.assign(grid_->num_points(), 0);
   num_refined_ = 0;
   num_faces_ = 2 * grid_->tiles_x() * grid_->tiles_y();
+  exposed_.reset(grid_->num_points());
+  maximal_.reset(grid_->num_points());
+  const std::size_t s = grid_->tile_size(), w = grid_->lattice_width();
+  for (std::size_t ty = 0; ty < grid_->tiles_y(); ++ty)
+    for (std::size_t tx = 0; tx < grid_->tiles_x(); ++tx)
+      exposed_.insert(static_cast<Index>((ty * s + s / 2) * w + tx * s + s / 2));
+  sets_valid_ = true;
+}
+
+void Grid48Front::rebuild_sets() const {
+  const Grid48& g = *grid_;
+  exposed_.reset(g.num_points());
+  maximal_.reset(g.num_points());
+  for (Index p = 0; p < g.num_points(); ++p) {
+    if (!g.is_node(p)) continue;
+    if (refined_[p]) {
+      bool leaf = true;
+      g.for_each_child(p, [&](Index c) { leaf = leaf && !refined_[c]; });
+      if (leaf) maximal_.insert(p);
+    } else {
+      bool exposed = g.level(p) == 0;
+      g.for_each_parent(p, [&](Index q) { exposed = exposed || refined_[q]; });
+      if (exposed) exposed_.insert(p);
+    }
+  }
+  sets_valid_ = true;
+}
+
+void Grid48Front::on_refined(Index t) {
+  exposed_.erase(t);
+  maximal_.insert(t);
+  grid_->for_each_parent(t, [&](Index q) { maximal_.erase(q); });
+  grid_->for_each_child(t, [&](Index c) { exposed_.insert(c); });
+}
+
+void Grid48Front::on_coarsened(Index t) {
+  maximal_.erase(t);
+  exposed_.insert(t);
+  const Grid48& g = *grid_;
+  g.for_each_parent(t, [&](Index q) {
+    bool leaf = true;
+    g.for_each_child(q, [&](Index c) { leaf = leaf && !refined_[c]; });
+    if (leaf) maximal_.insert(q);
+  });
+  g.for_each_child(t, [&](Index c) {
+    bool exposed = false;
+    g.for_each_parent(c, [&](Index q) { exposed = exposed || refined_[q]; });
+    if (!exposed) exposed_.erase(c);
+  });
 }
 
 void Grid48Front::coarsen_one(Index p) {
@@ -471,7 +521,9 @@ void Grid48Front::coarsen_one(Index p) {
     throw InvalidInput("Grid48Front::coarsen_one: diamond " + std::to_string(p) +
                            (refined_[p] ? " has a refined child" : " is not refined"),
                        p);
+  if (!sets_valid_) rebuild_sets();
   refined_[p] = 0;
+  on_coarsened(p);
   --num_refined_;
   num_faces_ -= static_cast<std::size_t>(grid_->num_triangles(p));
 }

@@ -197,6 +197,38 @@ class Grid48Front {
   std::size_t num_faces_ = 0;
   std::size_t num_refined_ = 0;
   std::vector<Index> stack_;
+
+  // The boundary of the refined set, kept up to date by refine/coarsen_one so that update() touches only
+  // it: exposed diamonds (unrefined, with a refined parent or a tile centre: exactly the hypotenuse
+  // midpoints of current triangles) and maximal diamonds (refined, no refined child). Index sets with a
+  // position per lattice point. extract_fast leaves them stale; they are rebuilt on first use.
+  struct IndexSet {
+    std::vector<Index> items;
+    std::vector<Index> pos;
+    void reset(std::size_t n) {
+      items.clear();
+      pos.assign(n, kInvalid);
+    }
+    void insert(Index p) {
+      if (pos[p] != kInvalid) return;
+      pos[p] = static_cast<Index>(items.size());
+      items.push_back(p);
+    }
+    void erase(Index p) {
+      const Index i = pos[p];
+      if (i == kInvalid) return;
+      const Index last = items.back();
+      items[i] = last;
+      pos[last] = i;
+      items.pop_back();
+      pos[p] = kInvalid;
+    }
+  };
+  mutable IndexSet exposed_, maximal_;
+  mutable bool sets_valid_ = false;
+  void rebuild_sets() const;
+  void on_refined(Index t);
+  void on_coarsened(Index t);
 };
 
 // ---- inline implementation -------------------------------------------------------------------------
@@ -295,6 +327,7 @@ inline bool Grid48Front::is_coarsenable(Index p) const noexcept {
 template <class Sink>
 void Grid48Front::refine(Index p, Sink&& sink) {
   if (refined_[p]) return;
+  if (!sets_valid_) rebuild_sets();
   stack_.clear();
   stack_.push_back(p);
   while (!stack_.empty()) {
@@ -313,6 +346,7 @@ void Grid48Front::refine(Index p, Sink&& sink) {
     if (!pushed) {
       stack_.pop_back();
       refined_[t] = 1;
+      on_refined(t);
       ++num_refined_;
       num_faces_ += static_cast<std::size_t>(grid_->num_triangles(t));
       sink(t);
@@ -368,21 +402,14 @@ void Grid48Front::for_each_triangle(Fn&& fn) const {
 
 template <class Fn>
 void Grid48Front::for_each_refine_candidate(Fn&& fn) const {
-  const std::uint32_t lw = static_cast<std::uint32_t>(grid_->lattice_width());
-  for_each_triangle([&](Index, Index h0, Index h1) {
-    const std::uint32_t y0 = grid_->py(h0), y1 = grid_->py(h1);
-    const std::uint32_t x0 = h0 - y0 * lw, x1 = h1 - y1 * lw;
-    if (((x0 + x1) | (y0 + y1)) & 1u) return;
-    fn(static_cast<Index>(((y0 + y1) / 2) * lw + (x0 + x1) / 2));
-  });
+  if (!sets_valid_) rebuild_sets();
+  for (Index p : exposed_.items) fn(p);
 }
 
 template <class Fn>
 void Grid48Front::for_each_coarsen_candidate(Fn&& fn) const {
-  // A coarsenable diamond's four children are unrefined, so its centre is the apex of current triangles.
-  for_each_triangle([&](Index apex, Index, Index) {
-    if (grid_->is_node(apex) && is_coarsenable(apex)) fn(apex);
-  });
+  if (!sets_valid_) rebuild_sets();
+  for (Index p : maximal_.items) fn(p);
 }
 
 }  // namespace varmesh
