@@ -142,7 +142,7 @@ int cmd_terrain(const TerrainArgs& a) {
     o.width = 1024;
     o.height = 768;
     o.height_ramp = true;
-    o.wireframe = mesh.num_faces() < 200000;
+    o.wireframe = mesh.num_faces() < 40000;  // denser wireframes turn black at this size
     write_png(a.png, render_mesh(mesh, default_camera_for(mesh, 4.0f / 3.0f), o));
   }
   return 0;
