@@ -9,6 +9,9 @@
 
 #include "multitri/errors.hpp"
 
+#include <glm/mat3x3.hpp>
+#include <glm/matrix.hpp>
+
 namespace varmesh {
 namespace {
 
@@ -152,8 +155,8 @@ void Grid48::compute_bounds_fast() {
             }
             if (lo <= hi) {
               // Outward rounding keeps the float range a bound of the double computation.
-              lo = std::nextafter(lo, -3.0e38f);
-              hi = std::nextafter(hi, 3.0e38f);
+              lo -= std::abs(lo) * 1e-6f + 1e-30f;
+              hi += std::abs(hi) * 1e-6f + 1e-30f;
               err = std::max({err, hi, -lo});
             }
             rmin[2 * p + static_cast<std::size_t>(side)] = lo;
@@ -456,8 +459,125 @@ QueryStats Grid48Front::extract_fast(const Query& q) {
   num_refined_ = refined;
   num_faces_ = faces;
   sets_valid_ = false;
+  view_valid_ = false;
   stats.refined = refined;
   stats.evaluated = evaluated;
+  return stats;
+}
+
+Query ViewQuery::to_query() const {
+  Query q;
+  std::vector<Criterion> parts{Criterion::outside_frustum(camera.frustum()),
+                               Criterion::screen_error(camera, viewport_height, pixels)};
+  if (object_error >= 0.0f) parts.push_back(Criterion::object_error(object_error));
+  q.criterion = Criterion::any_of(std::move(parts));
+  return q;
+}
+
+// Evaluates diamond p for the view and records how much camera motion it can take before its status can
+// change. Frustum: each plane's signed distance at the centre moves by at most |d eye| + angle * |c - eye|
+// (the planes turn with the camera); screen error: distance minus radius moves by at most |d eye|. Returns
+// "wanted" exactly as Query::wants would (same formulas as Criterion::is_fine).
+bool Grid48Front::evaluate_view(Index p, const ViewQuery& v, const Frustum& fr, float scale, Slack& s) {
+  const Grid48& g = *grid_;
+  const glm::vec3 c = g.position(p);
+  const float r = g.radius(p), e = g.error(p);
+  s.t0 = moved_;
+  s.r0 = turned_;
+  const float dist = glm::length(c - v.camera.eye);
+  s.rho = dist + r;
+  if (v.object_error >= 0.0f && e <= v.object_error) {  // fine for ever (under this view query)
+    s.slack = 3.0e38f;
+    return false;
+  }
+  // Frustum: outside if some plane has distance < -r.
+  float outside_by = -1.0f, inside_by = 3.0e38f;
+  for (const Plane& pl : fr.planes) {
+    const float sd = pl.signed_distance(c) + r;
+    if (sd < 0.0f) outside_by = std::max(outside_by, -sd);
+    inside_by = std::min(inside_by, sd);
+  }
+  const float margin = 1e-5f * (dist + r + 1.0f);
+  if (outside_by > 0.0f) {
+    s.slack = outside_by - margin;
+    return false;
+  }
+  // Screen error: fine when e * scale <= pixels * (dist - r).
+  const float room = dist - r - e * scale / v.pixels;
+  const bool fine = dist - r > 0.0f ? e * scale <= v.pixels * (dist - r) : e <= 0.0f;
+  // Not outside: stays so while every plane keeps its side; the screen status while |room| holds.
+  s.slack = std::min(inside_by, std::abs(room)) - margin;
+  return !fine;
+}
+
+QueryStats Grid48Front::update_view(const ViewQuery& v) {
+  const ViewQuery& o = last_view_;
+  const bool same_params = view_valid_ && o.viewport_height == v.viewport_height && o.pixels == v.pixels &&
+                           o.object_error == v.object_error && o.camera.fov_y_deg == v.camera.fov_y_deg &&
+                           o.camera.aspect == v.camera.aspect && o.camera.z_near == v.camera.z_near &&
+                           o.camera.z_far == v.camera.z_far;
+  if (!sets_valid_) rebuild_sets();
+  if (!same_params) {
+    // Everything is re-evaluated: forget every slack (they were computed for other parameters).
+    std::fill(exposed_.slack.begin(), exposed_.slack.end(), Slack{});
+    std::fill(maximal_.slack.begin(), maximal_.slack.end(), Slack{});
+    moved_ = turned_ = 0.0f;
+  } else {
+    moved_ += glm::length(v.camera.eye - o.camera.eye);
+    // Rotation between the two view frames, as an angle (geodesic distance on SO(3)).
+    const glm::mat3 ra(o.camera.view()), rb(v.camera.view());
+    const glm::mat3 rel = glm::transpose(ra) * rb;
+    const float tr = rel[0][0] + rel[1][1] + rel[2][2];
+    turned_ += std::acos(std::clamp((tr - 1.0f) * 0.5f, -1.0f, 1.0f)) + 1e-6f;
+  }
+  last_view_ = v;
+  view_valid_ = true;
+  const Frustum fr = v.camera.frustum();
+  const float scale = v.camera.pixels_per_unit_at_distance_one(v.viewport_height);
+  auto stale = [&](const Slack& s) {
+    const float t = moved_ - s.t0, th = turned_ - s.r0;
+    return s.slack < 0.0f || t + th * (s.rho + t) >= s.slack;
+  };
+  QueryStats stats;
+  // Coarsen: maximal diamonds whose record may be out of date are evaluated; the others stay wanted.
+  std::vector<Index> work;
+  for (std::size_t i = 0; i < maximal_.items.size(); ++i)
+    if (stale(maximal_.slack[i])) work.push_back(maximal_.items[i]);
+  while (!work.empty()) {
+    const Index p = work.back();
+    work.pop_back();
+    const Index i = maximal_.pos[p];
+    if (i == kInvalid || !stale(maximal_.slack[i])) continue;
+    ++stats.evaluated;
+    if (evaluate_view(p, v, fr, scale, maximal_.slack[i])) continue;
+    Slack record = maximal_.slack[i];  // "not wanted", valid as an exposed diamond too
+    coarsen_one(p);
+    ++stats.coarsened;
+    exposed_.slack[exposed_.pos[p]] = record;
+    grid_->for_each_parent(p, [&](Index q) { work.push_back(q); });
+  }
+  // Refine: exposed diamonds whose record may be out of date, and everything newly exposed.
+  std::vector<Index> stack;
+  for (std::size_t i = 0; i < exposed_.items.size(); ++i)
+    if (stale(exposed_.slack[i])) stack.push_back(exposed_.items[i]);
+  while (!stack.empty()) {
+    const Index p = stack.back();
+    stack.pop_back();
+    const Index i = exposed_.pos[p];
+    if (i == kInvalid || !stale(exposed_.slack[i])) continue;
+    ++stats.evaluated;
+    if (!evaluate_view(p, v, fr, scale, exposed_.slack[i])) continue;
+    refine(p, [&](Index t) {
+      ++stats.refined;
+      grid_->for_each_child(t, [&](Index c) {
+        if (!refined_[c]) stack.push_back(c);
+      });
+    });
+  }
+  // Maximal diamonds without a record (refined now, or parents of coarsened ones) are wanted; evaluate them
+  // now so that the next frame can skip them.
+  for (std::size_t i = 0; i < maximal_.items.size(); ++i)
+    if (maximal_.slack[i].slack < 0.0f) evaluate_view(maximal_.items[i], v, fr, scale, maximal_.slack[i]);
   return stats;
 }
 
@@ -467,6 +587,7 @@ void Grid48Front::reset() {
   num_faces_ = 2 * grid_->tiles_x() * grid_->tiles_y();
   exposed_.reset(grid_->num_points());
   maximal_.reset(grid_->num_points());
+  view_valid_ = false;
   const std::size_t s = grid_->tile_size(), w = grid_->lattice_width();
   for (std::size_t ty = 0; ty < grid_->tiles_y(); ++ty)
     for (std::size_t tx = 0; tx < grid_->tiles_x(); ++tx)

@@ -27,6 +27,7 @@
 #include <glm/vec3.hpp>
 
 #include "multitri/bounds.hpp"
+#include "multitri/camera.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/query.hpp"
 #include "multitri/mt.hpp"
@@ -138,6 +139,17 @@ class Grid48 {
 };
 
 /// The state of one extraction on a Grid48: which diamonds are split. Models RefinableFront (query.hpp).
+/// The usual view-dependent terrain query: refine inside the frustum until the projected error is at most
+/// `pixels` on a viewport `viewport_height` pixels high (and, if object_error >= 0, stop wherever the
+/// vertical error is at most object_error). to_query() gives the equivalent generic Query.
+struct ViewQuery {
+  Camera camera;
+  float viewport_height = 1080.0f;
+  float pixels = 1.0f;
+  float object_error = -1.0f;
+  Query to_query() const;
+};
+
 class Grid48Front {
  public:
   explicit Grid48Front(const Grid48& grid);
@@ -169,6 +181,14 @@ class Grid48Front {
   /// refined diamond whose parent is not refined (a non-monotone criterion), it falls back to the generic
   /// algorithm, so the result is always the same as extract(). Queries with budgets go to extract().
   QueryStats extract_fast(const Query& q);
+
+  /// Frame-to-frame update for a moving camera: the same state update(front, v.to_query()) reaches (which
+  /// is extract()'s), but a boundary diamond is re-evaluated only when the camera has moved enough since
+  /// its last evaluation to possibly change its status. Each evaluation stores a slack: how far the eye may
+  /// translate (and the view rotate, scaled by the diamond's distance) before the frustum test or the
+  /// screen-error test can flip. When the viewport, pixels, field of view, aspect, clipping distances or
+  /// object error change, it re-evaluates everything. Costs 16 bytes per boundary diamond of extra state.
+  QueryStats update_view(const ViewQuery& v);
   /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
   template <class Fn> void for_each_triangle(Fn&& fn) const;
   /// Calls fn(key, a, b, c) with world positions for every current triangle, unclipped (spatial queries);
@@ -202,30 +222,45 @@ class Grid48Front {
   // it: exposed diamonds (unrefined, with a refined parent or a tile centre: exactly the hypotenuse
   // midpoints of current triangles) and maximal diamonds (refined, no refined child). Index sets with a
   // position per lattice point. extract_fast leaves them stale; they are rebuilt on first use.
+  // Per boundary diamond, for update_view: the slack of its last evaluation, its distance term, and the
+  // accumulated camera translation and rotation at that evaluation (slack < 0: never evaluated).
+  struct Slack {
+    float slack = -1.0f, rho = 0.0f, t0 = 0.0f, r0 = 0.0f;
+  };
   struct IndexSet {
     std::vector<Index> items;
+    std::vector<Slack> slack;  // parallel to items: scanned sequentially by update_view
     std::vector<Index> pos;
     void reset(std::size_t n) {
       items.clear();
+      slack.clear();
       pos.assign(n, kInvalid);
     }
     void insert(Index p) {
       if (pos[p] != kInvalid) return;
       pos[p] = static_cast<Index>(items.size());
       items.push_back(p);
+      slack.push_back({});
     }
     void erase(Index p) {
       const Index i = pos[p];
       if (i == kInvalid) return;
       const Index last = items.back();
       items[i] = last;
+      slack[i] = slack.back();
       pos[last] = i;
       items.pop_back();
+      slack.pop_back();
       pos[p] = kInvalid;
     }
   };
   mutable IndexSet exposed_, maximal_;
   mutable bool sets_valid_ = false;
+
+  bool view_valid_ = false;
+  ViewQuery last_view_{};
+  float moved_ = 0.0f, turned_ = 0.0f;
+  bool evaluate_view(Index p, const ViewQuery& v, const Frustum& fr, float scale, Slack& s);
   void rebuild_sets() const;
   void on_refined(Index t);
   void on_coarsened(Index t);

@@ -203,3 +203,43 @@ TEST(Grid48, RandomRefineCoarsenWalksKeepTheFrontValid) {
 
 }  // namespace
 }  // namespace varmesh
+
+namespace varmesh {
+namespace {
+
+TEST(Grid48, UpdateViewFollowsAMovingCameraExactly) {
+  const HeightField f = make_fractal_terrain(257, 193, 21, 60.0f);
+  const Grid48 g(f);
+  Grid48Front moving(g), fresh(g);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  ViewQuery v;
+  v.camera.eye = {20.0f, 20.0f, 80.0f};
+  v.camera.target = {150.0f, 120.0f, 10.0f};
+  v.camera.z_near = 0.5f;
+  v.camera.z_far = 2000.0f;
+  v.pixels = 1.5f;
+  std::size_t evaluated = 0, boundary = 0;
+  for (int frame = 0; frame < 120; ++frame) {
+    // Small moves and turns, with an occasional jump and a change of parameters.
+    v.camera.eye += glm::vec3(1.5f + u(rng), 1.0f + u(rng), 0.3f * u(rng));
+    v.camera.target += glm::vec3(2.0f * u(rng), 2.0f * u(rng), u(rng));
+    if (frame == 60) v.camera.eye = {200.0f, 30.0f, 50.0f};
+    if (frame == 90) v.pixels = 3.0f;
+    const QueryStats st = moving.update_view(v);
+    fresh.extract_fast(v.to_query());
+    moving.validate();
+    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "frame " << frame;
+    for (Index p = 0; p < g.num_points(); ++p)
+      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "frame " << frame << " point " << p;
+    if (frame > 0 && frame != 60 && frame != 90) {
+      evaluated += st.evaluated;
+      boundary += fresh.num_faces();
+    }
+  }
+  // Coherence pays: far fewer evaluations than there are triangles on the front.
+  EXPECT_LT(evaluated, boundary / 2);
+}
+
+}  // namespace
+}  // namespace varmesh
