@@ -32,6 +32,26 @@ void for_rows(std::ptrdiff_t h, std::ptrdiff_t w, std::ptrdiff_t d, Body&& body)
   other.join();
 }
 
+// Visits every diamond, finest level first (edge diamonds of size d, then squares of size d, for
+// d = 1, 2, 4, ...): fn(x, y, d, square). Within one level the rows are split over two threads; a diamond
+// reads only finer levels and writes only its own entries, so the halves never race.
+template <class Fn>
+void for_each_diamond_finest_first(std::ptrdiff_t w, std::ptrdiff_t h, int log2_tile, Fn&& fn) {
+  for (int ld = 0; ld < log2_tile; ++ld) {
+    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
+    for (int pass = 0; pass < 2; ++pass) {
+      for_rows(h, w, d, [&](std::ptrdiff_t y_begin, std::ptrdiff_t y_end) {
+        for (std::ptrdiff_t y = y_begin; y < y_end; y += d) {
+          const bool yodd = ((y / d) & 1) != 0;
+          if (pass == 1 && !yodd) continue;
+          // Edge diamonds: x an odd multiple of d on even rows, an even one on odd rows; squares: both odd.
+          for (std::ptrdiff_t x = (pass == 1 || !yodd) ? d : 0; x < w; x += 2 * d) fn(x, y, d, pass == 1);
+        }
+      });
+    }
+  }
+}
+
 float round_up(double v) {
   float f = static_cast<float>(v);
   if (static_cast<double>(f) < v) f = std::nextafter(f, 3.0e38f);
@@ -125,76 +145,66 @@ void Grid48::compute_bounds_fast() {
     lo = rmin[t];
     hi = rmax[t];
   };
-  for (int ld = 0; ld < log2_tile_; ++ld) {
-    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
-    for (int pass = 0; pass < 2; ++pass) {  // edge diamonds of size d, then square diamonds of size d
-      for_rows(h, w, d, [&](std::ptrdiff_t y_begin, std::ptrdiff_t y_end) {
-        for (std::ptrdiff_t y = y_begin; y < y_end; y += d) {
-          const bool yodd = ((y / d) & 1) != 0;
-          if (pass == 1 && !yodd) continue;
-          const std::ptrdiff_t x_start = (pass == 1 || !yodd) ? d : 0;
-          for (std::ptrdiff_t x = x_start; x < w; x += 2 * d) {
-            const std::size_t p = static_cast<std::size_t>(y * w + x);
-            // The diamond's corners: hypotenuse ends (b, c) and the one or two apexes.
-            std::ptrdiff_t bx, by, cx, cy, a0x, a0y, a1x, a1y;
-            if (pass == 1) {
-              const std::ptrdiff_t qx = ((x - d) / (2 * d)) % 2 != 0 ? x - d : x + d;
-              const std::ptrdiff_t qy = ((y - d) / (2 * d)) % 2 != 0 ? y - d : y + d;
-              bx = qx, by = qy, cx = 2 * x - qx, cy = 2 * y - qy;
-              a0x = 2 * x - qx, a0y = qy, a1x = qx, a1y = 2 * y - qy;
-            } else if (!yodd) {  // horizontal split edge
-              bx = x - d, by = y, cx = x + d, cy = y;
-              a0x = x, a0y = y - d, a1x = x, a1y = y + d;
-            } else {  // vertical split edge
-              bx = x, by = y - d, cx = x, cy = y + d;
-              a0x = x - d, a0y = y, a1x = x + d, a1y = y;
-            }
-            const double hb = z[by * w + bx], hc = z[cy * w + cx], hm = z[p];
-            const double delta = hm - 0.5 * (hb + hc);
-            const float dlo = static_cast<float>(std::min(0.0, delta)), dhi = static_cast<float>(std::max(0.0, delta));
-            float err = 0.0f;
-            const glm::vec3 centre(float(x) * sx_, float(y) * sy_, z[p]);
-            float r = 0.0f;
-            for (int k = 0; k < 2; ++k) {
-              const std::ptrdiff_t ax = k == 0 ? a0x : a1x, ay = k == 0 ? a0y : a1y;
-              if (ax < 0 || ay < 0 || ax >= w || ay >= h) continue;
-              const int side = (ax < x || (ax == x && ay < y)) ? 0 : 1;
-              float lo0, hi0, lo1, hi1;
-              child_range(x, y, ax, ay, bx, by, lo0, hi0);
-              child_range(x, y, cx, cy, ax, ay, lo1, hi1);
-              float lo = 3.0e38f, hi = -3.0e38f;
-              if (lo0 <= hi0) {
-                lo = std::min(lo, lo0 + dlo);
-                hi = std::max(hi, hi0 + dhi);
-              }
-              if (lo1 <= hi1) {
-                lo = std::min(lo, lo1 + dlo);
-                hi = std::max(hi, hi1 + dhi);
-              }
-              if (lo <= hi) {
-                // Outward rounding keeps the float range a bound of the double computation.
-                lo -= std::abs(lo) * 1e-6f + 1e-30f;
-                hi += std::abs(hi) * 1e-6f + 1e-30f;
-                err = std::max({err, hi, -lo});
-              }
-              rmin[2 * p + static_cast<std::size_t>(side)] = lo;
-              rmax[2 * p + static_cast<std::size_t>(side)] = hi;
-              const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, z[ay * w + ax]);
-              r = std::max(r, glm::length(apex - centre));
-            }
-            r = std::max({r, glm::length(glm::vec3(float(bx) * sx_, float(by) * sy_, float(hb)) - centre),
-                          glm::length(glm::vec3(float(cx) * sx_, float(cy) * sy_, float(hc)) - centre)});
-            for_each_child(static_cast<Index>(p), [&](Index ch) {
-              err = std::max(err, error_[ch]);
-              r = std::max(r, glm::length(position(ch) - centre) + radius_[ch]);
-            });
-            error_[p] = err;
-            radius_[p] = r * (1.0f + 1e-6f);
-          }
+  for_each_diamond_finest_first(w, h, log2_tile_, [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
+      const int pass = square ? 1 : 0;
+      const bool yodd = ((y / d) & 1) != 0;
+      const std::size_t p = static_cast<std::size_t>(y * w + x);
+      // The diamond's corners: hypotenuse ends (b, c) and the one or two apexes.
+      std::ptrdiff_t bx, by, cx, cy, a0x, a0y, a1x, a1y;
+      if (pass == 1) {
+        const std::ptrdiff_t qx = ((x - d) / (2 * d)) % 2 != 0 ? x - d : x + d;
+        const std::ptrdiff_t qy = ((y - d) / (2 * d)) % 2 != 0 ? y - d : y + d;
+        bx = qx, by = qy, cx = 2 * x - qx, cy = 2 * y - qy;
+        a0x = 2 * x - qx, a0y = qy, a1x = qx, a1y = 2 * y - qy;
+      } else if (!yodd) {  // horizontal split edge
+        bx = x - d, by = y, cx = x + d, cy = y;
+        a0x = x, a0y = y - d, a1x = x, a1y = y + d;
+      } else {  // vertical split edge
+        bx = x, by = y - d, cx = x, cy = y + d;
+        a0x = x - d, a0y = y, a1x = x + d, a1y = y;
+      }
+      const double hb = z[by * w + bx], hc = z[cy * w + cx], hm = z[p];
+      const double delta = hm - 0.5 * (hb + hc);
+      const float dlo = static_cast<float>(std::min(0.0, delta)), dhi = static_cast<float>(std::max(0.0, delta));
+      float err = 0.0f;
+      const glm::vec3 centre(float(x) * sx_, float(y) * sy_, z[p]);
+      float r = 0.0f;
+      for (int k = 0; k < 2; ++k) {
+        const std::ptrdiff_t ax = k == 0 ? a0x : a1x, ay = k == 0 ? a0y : a1y;
+        if (ax < 0 || ay < 0 || ax >= w || ay >= h) continue;
+        const int side = (ax < x || (ax == x && ay < y)) ? 0 : 1;
+        float lo0, hi0, lo1, hi1;
+        child_range(x, y, ax, ay, bx, by, lo0, hi0);
+        child_range(x, y, cx, cy, ax, ay, lo1, hi1);
+        float lo = 3.0e38f, hi = -3.0e38f;
+        if (lo0 <= hi0) {
+          lo = std::min(lo, lo0 + dlo);
+          hi = std::max(hi, hi0 + dhi);
         }
+        if (lo1 <= hi1) {
+          lo = std::min(lo, lo1 + dlo);
+          hi = std::max(hi, hi1 + dhi);
+        }
+        if (lo <= hi) {
+          // Outward rounding keeps the float range a bound of the double computation.
+          lo -= std::abs(lo) * 1e-6f + 1e-30f;
+          hi += std::abs(hi) * 1e-6f + 1e-30f;
+          err = std::max({err, hi, -lo});
+        }
+        rmin[2 * p + static_cast<std::size_t>(side)] = lo;
+        rmax[2 * p + static_cast<std::size_t>(side)] = hi;
+        const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, z[ay * w + ax]);
+        r = std::max(r, glm::length(apex - centre));
+      }
+      r = std::max({r, glm::length(glm::vec3(float(bx) * sx_, float(by) * sy_, float(hb)) - centre),
+                    glm::length(glm::vec3(float(cx) * sx_, float(cy) * sy_, float(hc)) - centre)});
+      for_each_child(static_cast<Index>(p), [&](Index ch) {
+        err = std::max(err, error_[ch]);
+        r = std::max(r, glm::length(position(ch) - centre) + radius_[ch]);
       });
-    }
-  }
+      error_[p] = err;
+      radius_[p] = r * (1.0f + 1e-6f);
+    });
 }
 
 std::size_t Grid48::num_nodes() const noexcept { return lw_ * lh_ - (tx_ + 1) * (ty_ + 1); }
@@ -293,62 +303,37 @@ void Grid48::compute_errors() {
     return e;
   };
   // Finest level first so that children are saturated before their parents.
-  for (int ld = 0; ld < log2_tile_; ++ld) {
-    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
-    for (int pass = 0; pass < 2; ++pass) {  // pass 0: edge diamonds of size d; pass 1: square diamonds
-      for_rows(h, w, d, [&](std::ptrdiff_t y_begin, std::ptrdiff_t y_end) {
-        for (std::ptrdiff_t y = y_begin; y < y_end; y += d) {
-          const bool yodd = ((y / d) & 1) != 0;
-          if (pass == 1 && !yodd) continue;
-          // Edge diamonds: x odd multiple of d on even rows, even multiple on odd rows. Squares: both odd.
-          const std::ptrdiff_t x_start = (pass == 1 || !yodd) ? d : 0;
-          for (std::ptrdiff_t x = x_start; x < w; x += 2 * d) {
-            const Index p = static_cast<Index>(y * w + x);
-            if (pass == 0 && !is_node(p)) continue;
-            // Samples covered: only rows/columns inside the grid count (padding repeats the border).
-            double e = (x - d > last_x || y - d > last_y) ? 0.0 : own_error(x, y, d, pass == 1);
-            float sat = round_up(e);
-            for_each_child(p, [&](Index c) { sat = std::max(sat, error_[c]); });
-            error_[p] = sat;
-          }
-        }
-      });
-    }
-  }
+  for_each_diamond_finest_first(w, h, log2_tile_, [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
+      const int pass = square ? 1 : 0;
+      const Index p = static_cast<Index>(y * w + x);
+      // Samples covered: only rows/columns inside the grid count (padding repeats the border).
+      double e = (x - d > last_x || y - d > last_y) ? 0.0 : own_error(x, y, d, pass == 1);
+      float sat = round_up(e);
+      for_each_child(p, [&](Index c) { sat = std::max(sat, error_[c]); });
+      error_[p] = sat;
+    });
 }
 
 void Grid48::compute_radii() {
   radius_.assign(lw_ * lh_, 0.0f);
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
-  for (int ld = 0; ld < log2_tile_; ++ld) {
-    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
-    for (int pass = 0; pass < 2; ++pass) {
-      for_rows(h, w, d, [&](std::ptrdiff_t y_begin, std::ptrdiff_t y_end) {
-        for (std::ptrdiff_t y = y_begin; y < y_end; y += d) {
-          const bool yodd = ((y / d) & 1) != 0;
-          for (std::ptrdiff_t x = (pass == 1 || !yodd) ? d : 0; x < w; x += 2 * d) {
-            const bool xodd = ((x / d) & 1) != 0;
-            if (pass == 0 && xodd == yodd) continue;
-            if (pass == 1 && !(xodd && yodd)) continue;
-            const Index p = static_cast<Index>(y * w + x);
-            const glm::vec3 c = position(p);
-            float r = 0.0f;
-            // Corners: the four axis neighbours at distance d (edge diamonds) or the four diagonal ones (squares).
-            static constexpr int kAxis[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
-            static constexpr int kDiag[4][2] = {{-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
-            for (int k = 0; k < 4; ++k) {
-              const auto& o = pass == 1 ? kDiag[k] : kAxis[k];
-              const std::ptrdiff_t qx = x + o[0] * d, qy = y + o[1] * d;
-              if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-              r = std::max(r, glm::length(position(static_cast<Index>(qy * w + qx)) - c));
-            }
-            for_each_child(p, [&](Index ch) { r = std::max(r, glm::length(position(ch) - c) + radius_[ch]); });
-            radius_[p] = r * (1.0f + 1e-6f);
-          }
-        }
-      });
-    }
-  }
+  for_each_diamond_finest_first(w, h, log2_tile_, [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
+      const int pass = square ? 1 : 0;
+      const Index p = static_cast<Index>(y * w + x);
+      const glm::vec3 c = position(p);
+      float r = 0.0f;
+      // Corners: the four axis neighbours at distance d (edge diamonds) or the four diagonal ones (squares).
+      static constexpr int kAxis[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+      static constexpr int kDiag[4][2] = {{-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+      for (int k = 0; k < 4; ++k) {
+        const auto& o = pass == 1 ? kDiag[k] : kAxis[k];
+        const std::ptrdiff_t qx = x + o[0] * d, qy = y + o[1] * d;
+        if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+        r = std::max(r, glm::length(position(static_cast<Index>(qy * w + qx)) - c));
+      }
+      for_each_child(p, [&](Index ch) { r = std::max(r, glm::length(position(ch) - c) + radius_[ch]); });
+      radius_[p] = r * (1.0f + 1e-6f);
+    });
 }
 
 Mt Grid48::to_mt() const {
@@ -744,10 +729,26 @@ TriMesh Grid48Front::to_mesh(std::vector<Index>* lattice_ids) const {
   };
   out.indices.reserve(num_faces_ * 3);
   if (!g.needs_clip()) {
+    // The hot path: indices written into a pre-sized array, positions from the lattice coordinates.
+    out.indices.resize(3 * num_faces_);
+    Index* dst = out.indices.data();
+    const std::uint32_t lwi = static_cast<std::uint32_t>(lw);
+    const float sxs = g.spacing_x(), sys = g.spacing_y();
+    auto vertex = [&](Index p) {
+      Index& slot = remap[p];
+      if (slot == kInvalid) {
+        slot = static_cast<Index>(out.positions.size());
+        const std::uint32_t y = g.py(p), x = p - y * lwi;
+        out.positions.push_back({float(x) * sxs, float(y) * sys, g.height_at(p)});
+        ids.push_back(p);
+      }
+      return slot;
+    };
     for_each_triangle([&](Index a, Index b, Index c) {
-      out.indices.push_back(lattice_vertex(a));
-      out.indices.push_back(lattice_vertex(b));
-      out.indices.push_back(lattice_vertex(c));
+      dst[0] = vertex(a);
+      dst[1] = vertex(b);
+      dst[2] = vertex(c);
+      dst += 3;
     });
   } else {
     const double xmax = double(g.grid_width() - 1), ymax = double(g.grid_height() - 1);
