@@ -80,7 +80,7 @@ struct TerrainArgs {
   float spacing = 1.0f;
   std::string raw_size;
   bool terrain_rgb = false;
-  bool exact = false;
+  bool fast_bound = false;
   bool measure = false;
   bool quiet = false;
 };
@@ -104,7 +104,7 @@ int cmd_terrain(const TerrainArgs& a) {
   if (!(a.spacing > 0.0f)) throw InvalidInput("--spacing must be > 0");
   field.spacing_x = field.spacing_y = a.spacing;
   Grid48Options go;
-  go.exact_errors = a.exact;
+  go.exact_errors = !a.fast_bound;
   Stopwatch build_watch;
   const Grid48 grid(field, go);
   const double build_ms = build_watch.ms();
@@ -205,7 +205,7 @@ int run(int argc, char** argv) {
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");
   terrain->add_option("--raw-size", ta.raw_size, "W,H of a .raw/.f32 file");
   terrain->add_flag("--terrain-rgb", ta.terrain_rgb, "decode a Mapbox Terrain-RGB PNG");
-  terrain->add_flag("--exact", ta.exact, "exact node errors (slower build, fewer triangles per error)");
+  terrain->add_flag("--fast-bound", ta.fast_bound, "looser O(1)-per-node error bounds (faster build, more triangles)");
   terrain->add_flag("--measure", ta.measure, "measure the true max vertical error of the result over all samples");
   terrain->add_option("--png", ta.png, "also render the result to this PNG");
 

@@ -16,6 +16,18 @@
 namespace varmesh {
 namespace {
 
+// The plane through three lattice points (x, y, z), as z = base + gx * x + gy * y.
+struct PlaneXY {
+  double gx = 0.0, gy = 0.0, base = 0.0;
+  PlaneXY(double ax, double ay, double az, double bx, double by, double bz, double cx, double cy, double cz) {
+    const double e1x = bx - ax, e1y = by - ay, e2x = cx - ax, e2y = cy - ay;
+    const double det = e1x * e2y - e2x * e1y;
+    gx = ((bz - az) * e2y - (cz - az) * e1y) / det;
+    gy = ((cz - az) * e1x - (bz - az) * e2x) / det;
+    base = az - gx * ax - gy * ay;
+  }
+};
+
 // Runs body(y_begin, y_end) over the rows 0, d, 2d, ... < h, split in two halves on two threads when the
 // level is large enough to pay for a thread. Diamonds of one level only read finer levels and write their
 // own entries, so the halves never race.
@@ -98,11 +110,11 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
     const std::size_t yy = std::min(y, height_ - 1);
     for (std::size_t x = 0; x < lw_; ++x) z_[y * lw_ + x] = field.z[yy * width_ + std::min(x, width_ - 1)];
   }
-  if (options.exact_errors) {
+  if (options.reference_scan) {
     compute_errors();
     compute_radii();
   } else {
-    compute_bounds_fast();
+    compute_bounds_fast(options.exact_errors);
   }
 }
 
@@ -116,7 +128,7 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
 // triangles have all their samples at their corners: range [0, 0]; triangles with no grid sample (in the
 // padding) have an empty range. Triangles are stored as (diamond, side): side 0 is the half whose apex is
 // left of the centre (or below it, on a vertical line), side 1 the other.
-void Grid48::compute_bounds_fast() {
+void Grid48::compute_bounds_fast(bool exact) {
   const std::size_t n = lw_ * lh_;
   error_.assign(n, 0.0f);
   radius_.assign(n, 0.0f);
@@ -144,6 +156,65 @@ void Grid48::compute_bounds_fast() {
     const std::size_t t = 2 * static_cast<std::size_t>(my * w + mx) + static_cast<std::size_t>(side);
     lo = rmin[t];
     hi = rmax[t];
+  };
+  // Exact range of h - plane_T over the grid samples of triangle T = (a; b, c) (apex a, hypotenuse b-c),
+  // by branch and bound over T's sub-triangles, whose exact ranges (relative to their own planes) are
+  // already known: over a sub-triangle q, h - plane_T = (h - plane_q) + (plane_q - plane_T), and the
+  // second term is linear, so its extremes are at q's corners, where it equals h - plane_T. A sub-triangle
+  // is opened only if that bound could beat the best value found so far; values are only ever taken at
+  // real samples (corners and hypotenuse midpoints), so the result is the exact maximum and minimum.
+  struct Tri {
+    std::ptrdiff_t ax, ay, bx, by, cx, cy;
+  };
+  auto exact_range = [&](const Tri& t, float& out_lo, float& out_hi) {
+    const PlaneXY pl(double(t.ax), double(t.ay), z[t.ay * w + t.ax], double(t.bx), double(t.by), z[t.by * w + t.bx],
+                     double(t.cx), double(t.cy), z[t.cy * w + t.cx]);
+    auto res = [&](std::ptrdiff_t px, std::ptrdiff_t py) {
+      return double(z[py * w + px]) - (pl.base + pl.gx * double(px) + pl.gy * double(py));
+    };
+    double lo = 1e300, hi = -1e300;
+    auto sample = [&](std::ptrdiff_t px, std::ptrdiff_t py) {
+      if (!in_grid(px, py)) return;
+      const double v = res(px, py);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    };
+    sample(t.ax, t.ay);
+    sample(t.bx, t.by);
+    sample(t.cx, t.cy);
+    Tri stack[160];
+    int top = 0;
+    stack[top++] = t;
+    bool first = true;
+    while (top > 0) {
+      const Tri q = stack[--top];
+      const std::ptrdiff_t sx = q.bx + q.cx, sy = q.by + q.cy;
+      if (((sx | sy) & 1) != 0) continue;  // finest: its only samples are its corners, already seen
+      const std::ptrdiff_t mx = sx / 2, my = sy / 2;
+      if (!first) {
+        const int side = (q.ax < mx || (q.ax == mx && q.ay < my)) ? 0 : 1;
+        const std::size_t id = 2 * static_cast<std::size_t>(my * w + mx) + static_cast<std::size_t>(side);
+        const float qlo = rmin[id], qhi = rmax[id];
+        if (qlo > qhi) continue;  // no grid sample inside
+        const double la = res(q.ax, q.ay), lb = res(q.bx, q.by), lc = res(q.cx, q.cy);
+        const double ub = double(qhi) + std::max({la, lb, lc}), lb2 = double(qlo) + std::min({la, lb, lc});
+        if (ub <= hi && lb2 >= lo) continue;
+      }
+      first = false;
+      sample(mx, my);
+      stack[top++] = Tri{mx, my, q.ax, q.ay, q.bx, q.by};
+      stack[top++] = Tri{mx, my, q.cx, q.cy, q.ax, q.ay};
+    }
+    if (lo > hi) {
+      out_lo = 3.0e38f;
+      out_hi = -3.0e38f;
+      return;
+    }
+    // Outward rounding to float keeps the stored range a bound.
+    out_lo = static_cast<float>(lo);
+    if (double(out_lo) > lo) out_lo = std::nextafter(out_lo, -3.0e38f);
+    out_hi = static_cast<float>(hi);
+    if (double(out_hi) < hi) out_hi = std::nextafter(out_hi, 3.0e38f);
   };
   for_each_diamond_finest_first(w, h, log2_tile_, [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
       const int pass = square ? 1 : 0;
@@ -173,23 +244,28 @@ void Grid48::compute_bounds_fast() {
         const std::ptrdiff_t ax = k == 0 ? a0x : a1x, ay = k == 0 ? a0y : a1y;
         if (ax < 0 || ay < 0 || ax >= w || ay >= h) continue;
         const int side = (ax < x || (ax == x && ay < y)) ? 0 : 1;
-        float lo0, hi0, lo1, hi1;
-        child_range(x, y, ax, ay, bx, by, lo0, hi0);
-        child_range(x, y, cx, cy, ax, ay, lo1, hi1);
         float lo = 3.0e38f, hi = -3.0e38f;
-        if (lo0 <= hi0) {
-          lo = std::min(lo, lo0 + dlo);
-          hi = std::max(hi, hi0 + dhi);
-        }
-        if (lo1 <= hi1) {
-          lo = std::min(lo, lo1 + dlo);
-          hi = std::max(hi, hi1 + dhi);
-        }
-        if (lo <= hi) {
-          // Outward rounding keeps the float range a bound of the double computation.
-          lo -= std::abs(lo) * 1e-6f + 1e-30f;
-          hi += std::abs(hi) * 1e-6f + 1e-30f;
-          err = std::max({err, hi, -lo});
+        if (exact) {
+          exact_range(Tri{ax, ay, bx, by, cx, cy}, lo, hi);
+          if (lo <= hi) err = std::max({err, hi, -lo});
+        } else {
+          float lo0, hi0, lo1, hi1;
+          child_range(x, y, ax, ay, bx, by, lo0, hi0);
+          child_range(x, y, cx, cy, ax, ay, lo1, hi1);
+          if (lo0 <= hi0) {
+            lo = std::min(lo, lo0 + dlo);
+            hi = std::max(hi, hi0 + dhi);
+          }
+          if (lo1 <= hi1) {
+            lo = std::min(lo, lo1 + dlo);
+            hi = std::max(hi, hi1 + dhi);
+          }
+          if (lo <= hi) {
+            // Outward rounding keeps the float range a bound of the double computation.
+            lo -= std::abs(lo) * 1e-6f + 1e-30f;
+            hi += std::abs(hi) * 1e-6f + 1e-30f;
+            err = std::max({err, hi, -lo});
+          }
         }
         rmin[2 * p + static_cast<std::size_t>(side)] = lo;
         rmax[2 * p + static_cast<std::size_t>(side)] = hi;
@@ -215,17 +291,6 @@ std::size_t Grid48::memory_bytes() const noexcept {
 
 namespace {
 
-// The plane through three lattice points (x, y, z), as z = base + gx * x + gy * y.
-struct PlaneXY {
-  double gx = 0.0, gy = 0.0, base = 0.0;
-  PlaneXY(double ax, double ay, double az, double bx, double by, double bz, double cx, double cy, double cz) {
-    const double e1x = bx - ax, e1y = by - ay, e2x = cx - ax, e2y = cy - ay;
-    const double det = e1x * e2y - e2x * e1y;
-    gx = ((bz - az) * e2y - (cz - az) * e1y) / det;
-    gy = ((cz - az) * e1x - (bz - az) * e2x) / det;
-    base = az - gx * ax - gy * ay;
-  }
-};
 
 // Largest |row[x] - (b + g x)| for x in [x0, x1].
 inline double span_error(const float* row, std::ptrdiff_t x0, std::ptrdiff_t x1, double b, double g) {

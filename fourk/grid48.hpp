@@ -57,10 +57,14 @@ struct Grid48Options {
   double max_padding = 1.15;
   /// Force a tile size (power of two cells, 0 = automatic).
   std::size_t tile_size = 0;
-  /// Node errors: false (default) = a guaranteed upper bound computed bottom-up in O(1) per node from
-  /// signed residual ranges (fast); true = the exact largest vertical distance, found by scanning every
-  /// sample at every level (O(samples * levels), about 10x slower to build, fewest triangles per error).
-  bool exact_errors = false;
+  /// Node errors. true (default): the exact largest vertical distance between each diamond's triangles
+  /// and the samples they cover, by branch and bound over sub-triangles whose exact signed residual ranges
+  /// are already known (finest first). false: a guaranteed but looser upper bound, O(1) per node from
+  /// those ranges (faster build, more triangles for the same error).
+  bool exact_errors = true;
+  /// Compute the exact errors by scanning every sample at every level instead (O(samples * levels)): the
+  /// slow reference the branch and bound is tested against.
+  bool reference_scan = false;
 };
 
 class Grid48 {
@@ -124,7 +128,7 @@ class Grid48 {
  private:
   void compute_errors();
   void compute_radii();
-  void compute_bounds_fast();
+  void compute_bounds_fast(bool exact);
   float sample_clamped(std::ptrdiff_t x, std::ptrdiff_t y) const noexcept;
 
   std::size_t width_ = 0, height_ = 0;  // grid samples

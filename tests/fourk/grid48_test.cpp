@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include "fourk/grid48.hpp"
 #include "multitri/heightfield.hpp"
@@ -239,6 +240,30 @@ TEST(Grid48, UpdateViewFollowsAMovingCameraExactly) {
   }
   // Coherence pays: far fewer evaluations than there are triangles on the front.
   EXPECT_LT(evaluated, boundary / 2);
+}
+
+}  // namespace
+}  // namespace varmesh
+
+namespace varmesh {
+namespace {
+
+// The branch-and-bound exact errors against the reference that scans every sample at every level, and the
+// fast bound against both (never below the exact value).
+TEST(Grid48, ExactErrorsMatchTheReferenceScan) {
+  for (auto [w, h, seed] : {std::tuple{65, 65, 31u}, std::tuple{100, 37, 32u}, std::tuple{131, 77, 33u}, std::tuple{2, 2, 34u}}) {
+    const HeightField f = make_fractal_terrain(static_cast<std::size_t>(w), static_cast<std::size_t>(h), seed, 50.0f);
+    Grid48Options exact, scan, fast;
+    scan.reference_scan = true;
+    fast.exact_errors = false;
+    const Grid48 a(f, exact), b(f, scan), c(f, fast);
+    for (Index p = 0; p < a.num_points(); ++p) {
+      if (!a.is_node(p)) continue;
+      ASSERT_NEAR(a.error(p), b.error(p), 1e-5f * (1.0f + b.error(p))) << w << "x" << h << " node " << p;
+      ASSERT_GE(c.error(p), b.error(p) * (1.0f - 1e-6f)) << "the fast bound is below the exact error at " << p;
+      ASSERT_FLOAT_EQ(a.radius(p), c.radius(p));
+    }
+  }
 }
 
 }  // namespace
