@@ -1,2 +1,85 @@
-// placeholder: filled in by its owner
-namespace varmesh {}
+#include "multitri/mesh_io.hpp"
+
+#include <cmath>
+#include <string>
+#include <string_view>
+
+#include "multitri/detail/mesh_io_formats.hpp"
+#include "multitri/errors.hpp"
+#include "multitri/file_util.hpp"
+
+namespace varmesh {
+namespace {
+
+bool ends_with_ci(const std::string& s, const char* suffix) {
+  const std::string_view suf(suffix);
+  if (s.size() < suf.size()) return false;
+  for (std::size_t i = 0; i < suf.size(); ++i) {
+    char c = s[s.size() - suf.size() + i];
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    if (c != suf[i]) return false;
+  }
+  return true;
+}
+
+bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// TriMesh::validate covers indices, sizes and positions; the writers also need finite attributes and
+// colours in [0, 1], or they would write files the readers reject.
+void validate_for_writing(const TriMesh& mesh) {
+  mesh.validate();
+  for (std::size_t v = 0; v < mesh.normals.size(); ++v)
+    if (!finite(mesh.normals[v])) throw InvalidInput("vertex normal is not finite", v);
+  for (std::size_t v = 0; v < mesh.texcoords.size(); ++v)
+    if (!std::isfinite(mesh.texcoords[v].x) || !std::isfinite(mesh.texcoords[v].y))
+      throw InvalidInput("vertex texcoord is not finite", v);
+  for (std::size_t v = 0; v < mesh.colors.size(); ++v) {
+    const glm::vec3& c = mesh.colors[v];
+    if (!(c.x >= 0.0f && c.x <= 1.0f && c.y >= 0.0f && c.y <= 1.0f && c.z >= 0.0f && c.z <= 1.0f))
+      throw InvalidInput("vertex colour is outside [0, 1]", v);
+  }
+}
+
+}  // namespace
+
+MeshFormat mesh_format_from_path(const std::string& path) {
+  if (ends_with_ci(path, ".obj")) return MeshFormat::kObj;
+  if (ends_with_ci(path, ".off")) return MeshFormat::kOff;
+  if (ends_with_ci(path, ".ply")) return MeshFormat::kPly;
+  throw IoError(path, "unknown mesh format (expected the extension .obj, .off or .ply)");
+}
+
+TriMesh read_mesh(const std::string& path, ReadInfo* info) {
+  const MeshFormat format = mesh_format_from_path(path);
+  const std::string data = read_file(path);
+  ReadInfo local;
+  TriMesh mesh;
+  switch (format) {
+    case MeshFormat::kObj: mesh = detail::read_obj(path, data, local); break;
+    case MeshFormat::kOff: mesh = detail::read_off(path, data, local); break;
+    case MeshFormat::kPly: mesh = detail::read_ply(path, data, local); break;
+  }
+  // The readers already reject what validate() would; this keeps the promise if a reader slips.
+  if (mesh.num_faces() == 0) throw IoError(path, "no faces (empty mesh)");
+  try {
+    mesh.validate();
+  } catch (const InvalidInput& e) {
+    throw IoError(path, std::string("invalid mesh: ") + e.what());
+  }
+  if (info != nullptr) *info = local;
+  return mesh;
+}
+
+void write_mesh(const std::string& path, const TriMesh& mesh, const WriteOptions& options) {
+  const MeshFormat format = mesh_format_from_path(path);
+  validate_for_writing(mesh);
+  std::string contents;
+  switch (format) {
+    case MeshFormat::kObj: contents = detail::format_obj(mesh); break;
+    case MeshFormat::kOff: contents = detail::format_off(mesh); break;
+    case MeshFormat::kPly: contents = detail::format_ply(mesh, options.binary); break;
+  }
+  write_file_atomically(path, contents);
+}
+
+}  // namespace varmesh

@@ -1,23 +1,32 @@
 #pragma once
 /// Reading and writing triangle meshes: OBJ, OFF and PLY.
 ///
-/// Readers validate everything they read and throw IoError naming the file and the 1-based line (text) or
-/// byte offset (binary) with the reason: truncated files, indices out of range, NaN/Inf coordinates, counts
-/// larger than the file can hold, unsupported properties or formats, meshes with no face. Polygons are
-/// fan-triangulated. Writers write to a temporary file in the same folder and rename it over the target,
-/// so a failed write leaves no partial file.
+/// Readers validate everything they read and throw IoError naming the file and the 1-based line (text, and
+/// PLY headers) or byte offset (binary PLY bodies) with the reason: truncated files, indices out of range,
+/// NaN/Inf coordinates, counts larger than the file can hold (checked before anything is allocated),
+/// unsupported properties or formats, meshes with no face ("no faces (empty mesh)"). Polygons are
+/// fan-triangulated: corners (c0, c1, c2, ..., ck) give (c0, c(i-1), c(i)) for i = 2..k. The result passes
+/// TriMesh::validate(). Writers write to a temporary file in the same folder and rename it over the
+/// target, so a failed write leaves no partial file.
 ///
 /// Supported:
-/// - OBJ: v (optionally with r g b colour after xyz), vt, vn, f with v, v/vt, v//vn, v/vt/vn and negative
-///   (relative) indices; other statements (o, g, s, usemtl, mtllib, l, p) are ignored. Vertices are the `v`
-///   statements, in file order, referenced or not; when corners give one vertex different vt/vn, the first
-///   one wins and ReadInfo::attribute_conflicts counts the others.
-/// - OFF (also COFF/NOFF headers with per-vertex colour/normal), comments with '#'.
-/// - PLY: ascii, binary_little_endian, binary_big_endian; element vertex with x y z (any numeric type),
-///   optional nx ny nz, red green blue (uchar or float), u v / s t / texture_u texture_v; element face with
-///   a list property vertex_indices or vertex_index; element tristrips with a list property vertex_indices
-///   where -1 restarts a strip (alternating orientation, degenerate triangles dropped). Other elements and
-///   properties are skipped (their sizes are honoured).
+/// - OBJ: v (optionally with r g b colour in [0, 1] after xyz, on every v or on none; a 4th number w is
+///   accepted and ignored), vt, vn, f with v, v/vt, v//vn, v/vt/vn and negative (relative) indices;
+///   other statements (o, g, s, usemtl, mtllib, l, p, ...) and '#' comments are ignored. Vertices are the
+///   `v` statements, in file order, referenced or not; when corners give one vertex different vt/vn, the
+///   first one wins and ReadInfo::attribute_conflicts counts the others. Vertices no corner gives a vt/vn
+///   get (0, 0) / (0, 0, 0) when the mesh has texcoords / normals at all.
+/// - OFF: headers OFF, COFF, NOFF, CNOFF (and STOFF variants with s t last), comments with '#'. Vertex
+///   colours are 3 or 4 numbers, integers 0..255 or floats 0..1 (a '.' or exponent marks floats); face
+///   colours are ignored.
+/// - PLY: ascii, binary_little_endian, binary_big_endian; any of the scalar types char/uchar/short/ushort/
+///   int/uint/float/double and int8/.../float64. Element vertex with x y z (any numeric type), optional
+///   nx ny nz, red green blue (uchar 0..255, ushort 0..65535, other integers 0..255, or float/double
+///   0..1), u v / s t / texture_u texture_v; element face with a list property vertex_indices or
+///   vertex_index; element tristrips with a list property vertex_indices where -1 restarts a strip: strip
+///   triangle i is (s[i], s[i+1], s[i+2]) for even i and (s[i+1], s[i], s[i+2]) for odd i, and
+///   triangles with a repeated vertex are dropped (ReadInfo::strip_degenerates_dropped). Other elements
+///   and properties are skipped (their sizes are honoured, lists included).
 #include <cstddef>
 #include <string>
 
@@ -45,7 +54,11 @@ struct WriteOptions {
 };
 
 /// Writes a mesh in the format given by the extension, atomically (temporary file + rename). Writes
-/// normals, texcoords and colours when present and the format supports them. Throws IoError.
+/// normals, texcoords and colours when present and the format supports them (OFF has no texcoords; PLY
+/// stores colours as uchar, so they come back rounded to k/255). Floats are written in the shortest form
+/// that reads back to the same float. Throws InvalidInput, before touching the file system, when the mesh
+/// fails TriMesh::validate() or has a non-finite attribute or a colour outside [0, 1]; throws IoError for an
+/// unknown extension or a failed write (the target is then left as it was).
 void write_mesh(const std::string& path, const TriMesh& mesh, const WriteOptions& options = {});
 
 }  // namespace varmesh

@@ -1,1 +1,808 @@
+#include "multitri/mesh_io.hpp"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <ostream>
+#include <set>
+#include <string>
+#include <vector>
+
 #include <gtest/gtest.h>
+
+#include "multitri/errors.hpp"
+#include "test_support.hpp"
+
+namespace varmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_text(const fs::path& path, const std::string& contents) {
+  std::ofstream out(path, std::ios::binary);
+  out << contents;
+  ASSERT_TRUE(out.good()) << path;
+}
+
+std::uint32_t bits(float f) { return std::bit_cast<std::uint32_t>(f); }
+
+// A small mesh whose floats are awkward to print: thirds, tiny, huge, negative zero, a subnormal.
+TriMesh awkward_mesh(bool normals, bool texcoords, bool colors) {
+  TriMesh m;
+  m.positions = {{0.1f, -0.0f, 1.0f / 3.0f},
+                 {3.4028235e38f, 1e-40f, -7.25f},
+                 {123456.79f, 2.0f / 3.0f, 1e-7f},
+                 {-1.0f, 0.0f, 5e-30f},
+                 {9.999999f, -2.5e-12f, 42.0f}};
+  m.indices = {0, 1, 2, 0, 2, 3, 3, 2, 4, 4, 1, 0};
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    const float t = static_cast<float>(v);
+    if (normals) m.normals.push_back({0.6f, -0.8f * t / 7.0f, 1.0f / (t + 3.0f)});
+    if (texcoords) m.texcoords.push_back({t / 9.0f, 1.0f - t * 0.1f});
+    // Multiples of 1/255 survive PLY's uchar colours exactly.
+    if (colors) m.colors.push_back({(3.0f * t) / 255.0f, 255.0f / 255.0f, (200.0f - t) / 255.0f});
+  }
+  return m;
+}
+
+void expect_vec3_bits(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b, const char* what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(bits(a[i][k]), bits(b[i][k])) << what << " " << i << "." << k;
+}
+
+void expect_identical(const TriMesh& expected, const TriMesh& got, bool with_texcoords = true) {
+  expect_vec3_bits(expected.positions, got.positions, "position");
+  EXPECT_EQ(expected.indices, got.indices);
+  expect_vec3_bits(expected.normals, got.normals, "normal");
+  expect_vec3_bits(expected.colors, got.colors, "colour");
+  if (with_texcoords) {
+    ASSERT_EQ(expected.texcoords.size(), got.texcoords.size());
+    for (std::size_t i = 0; i < expected.texcoords.size(); ++i) {
+      EXPECT_EQ(bits(expected.texcoords[i].x), bits(got.texcoords[i].x)) << i;
+      EXPECT_EQ(bits(expected.texcoords[i].y), bits(got.texcoords[i].y)) << i;
+    }
+  } else {
+    EXPECT_TRUE(got.texcoords.empty());
+  }
+}
+
+TEST(MeshIoFormat, ChoosesByExtensionCaseInsensitively) {
+  EXPECT_EQ(mesh_format_from_path("a/b.obj"), MeshFormat::kObj);
+  EXPECT_EQ(mesh_format_from_path("B.OFF"), MeshFormat::kOff);
+  EXPECT_EQ(mesh_format_from_path("x.y.PlY"), MeshFormat::kPly);
+  EXPECT_THROW(mesh_format_from_path("mesh.stl"), IoError);
+  EXPECT_THROW(mesh_format_from_path("obj"), IoError);
+  EXPECT_THROW(read_mesh("missing_folder/mesh.txt"), IoError);
+}
+
+TEST(MeshIoFormat, MissingFileIsIoError) {
+  const fs::path dir = testing::scratch_dir("mesh_io_missing");
+  EXPECT_THROW(read_mesh((dir / "none.ply").string()), IoError);
+}
+
+// Round trips: every format and attribute combination, positions bit-exact.
+struct RoundTripCase {
+  const char* ext;
+  bool binary;
+  bool normals;
+  bool texcoords;
+  bool colors;
+};
+
+void PrintTo(const RoundTripCase& c, std::ostream* os) {
+  *os << c.ext << (c.binary ? " binary" : " text") << " normals=" << c.normals << " texcoords=" << c.texcoords
+      << " colors=" << c.colors;
+}
+
+std::string case_name(const ::testing::TestParamInfo<RoundTripCase>& info) {
+  const RoundTripCase& c = info.param;
+  std::string name = std::string(c.ext) + (c.binary ? "_binary" : "_text");
+  if (c.normals) name += "_n";
+  if (c.texcoords) name += "_t";
+  if (c.colors) name += "_c";
+  return name;
+}
+
+std::vector<RoundTripCase> round_trip_cases() {
+  std::vector<RoundTripCase> cases;
+  for (int mask = 0; mask < 8; ++mask) {
+    const bool n = (mask & 1) != 0, t = (mask & 2) != 0, c = (mask & 4) != 0;
+    cases.push_back({"obj", false, n, t, c});
+    cases.push_back({"off", false, n, t, c});
+    cases.push_back({"ply", true, n, t, c});
+    cases.push_back({"ply", false, n, t, c});
+  }
+  return cases;
+}
+
+class MeshIoRoundTrip : public ::testing::TestWithParam<RoundTripCase> {};
+
+TEST_P(MeshIoRoundTrip, WriteThenReadIsIdentical) {
+  const RoundTripCase& c = GetParam();
+  const fs::path dir = testing::scratch_dir("mesh_io_round_trip_" + case_name({c, 0}));
+  const std::string path = (dir / (std::string("mesh.") + c.ext)).string();
+  const TriMesh mesh = awkward_mesh(c.normals, c.texcoords, c.colors);
+  WriteOptions options;
+  options.binary = c.binary;
+  write_mesh(path, mesh, options);
+  ReadInfo info;
+  info.polygons_triangulated = 99;  // the reader resets it
+  const TriMesh back = read_mesh(path, &info);
+  EXPECT_EQ(info.polygons_triangulated, 0u);
+  EXPECT_EQ(info.attribute_conflicts, 0u);
+  // OFF has no texture coordinates.
+  expect_identical(mesh, back, std::string(c.ext) != "off");
+  // Only the target is left in the folder: no temporary files.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+
+  // Writing what was read gives the same bytes again.
+  const std::string path2 = (dir / (std::string("again.") + c.ext)).string();
+  write_mesh(path2, back, options);
+  std::ifstream a(path, std::ios::binary), b(path2, std::ios::binary);
+  const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_EQ(sa, sb);
+}
+
+INSTANTIATE_TEST_SUITE_P(MeshIo, MeshIoRoundTrip, ::testing::ValuesIn(round_trip_cases()), case_name);
+
+TEST(MeshIoPly, BinaryFlagChoosesEncoding) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_flag");
+  const TriMesh mesh = awkward_mesh(false, false, false);
+  write_mesh((dir / "b.ply").string(), mesh);
+  WriteOptions ascii;
+  ascii.binary = false;
+  write_mesh((dir / "a.ply").string(), mesh, ascii);
+  std::ifstream b(dir / "b.ply", std::ios::binary), a(dir / "a.ply", std::ios::binary);
+  const std::string sb((std::istreambuf_iterator<char>(b)), {}), sa((std::istreambuf_iterator<char>(a)), {});
+  EXPECT_NE(sb.find("format binary_little_endian 1.0\n"), std::string::npos);
+  EXPECT_NE(sa.find("format ascii 1.0\n"), std::string::npos);
+}
+
+// Builds binary PLY bodies in either byte order.
+class Bytes {
+ public:
+  explicit Bytes(bool big_endian) : big_(big_endian) {}
+  template <class T>
+  Bytes& put(T v) {
+    auto b = std::bit_cast<std::array<char, sizeof(T)>>(v);
+    if (big_ != (std::endian::native == std::endian::big)) std::reverse(b.begin(), b.end());
+    data_.append(b.data(), b.size());
+    return *this;
+  }
+  const std::string& str() const { return data_; }
+
+ private:
+  bool big_;
+  std::string data_;
+};
+
+// Every scalar type, both spellings, skipped vertex properties and lists, a skipped element before and
+// after the faces, a quad, float colours, s t texcoords and vertex_index.
+std::string all_types_ply(const char* format) {
+  return std::string("ply\nformat ") + format +
+         " 1.0\n"
+         "comment every scalar type\n"
+         "obj_info skipped\n"
+         "element material 2\n"
+         "property list uint8 float32 shininess\n"
+         "property ushort id\n"
+         "element vertex 4\n"
+         "property double x\n"
+         "property float32 y\n"
+         "property short z\n"
+         "property char tag\n"
+         "property uchar flags\n"
+         "property list int16 uint junk\n"
+         "property uint16 u16\n"
+         "property int32 i32\n"
+         "property uint32 u32\n"
+         "property int8 i8\n"
+         "property float64 nx\n"
+         "property float ny\n"
+         "property int nz\n"
+         "property float red\n"
+         "property double green\n"
+         "property float blue\n"
+         "property float s\n"
+         "property float t\n"
+         "element face 2\n"
+         "property uchar flags\n"
+         "property list uint int16 vertex_index\n"
+         "property list uchar double weights\n"
+         "element edge 1\n"
+         "property int vertex1\n"
+         "property uint vertex2\n"
+         "end_header\n";
+}
+
+struct AllTypesVertex {
+  double x;
+  float y;
+  std::int16_t z;
+  float nx, ny;
+  std::int32_t nz;
+  float r, g, b, s, t;
+};
+
+const AllTypesVertex kAllTypes[4] = {
+    {0.5, -1.25f, 3, 0.0f, 0.0f, 1, 0.0f, 0.25f, 1.0f, 0.5f, 0.75f},
+    {1e-3, 2.0f, -4, 1.0f, 0.0f, 0, 0.5f, 0.5f, 0.5f, 0.0f, 1.0f},
+    {-2.0, 0.125f, 32767, 0.0f, 1.0f, 0, 1.0f, 0.0f, 0.0f, 1.0f, 0.0f},
+    {1e10, -0.0f, -32768, 0.0f, 0.0f, -1, 0.125f, 1.0f, 0.0f, 0.25f, 0.25f},
+};
+
+std::string all_types_binary(bool big) {
+  Bytes b(big);
+  // material: list of shininess floats, id
+  b.put<std::uint8_t>(2).put(1.0f).put(2.0f).put<std::uint16_t>(7);
+  b.put<std::uint8_t>(0).put<std::uint16_t>(8);
+  for (const AllTypesVertex& v : kAllTypes) {
+    b.put(v.x).put(v.y).put(v.z).put<std::int8_t>(-5).put<std::uint8_t>(200);
+    b.put<std::int16_t>(2).put<std::uint32_t>(0xdeadbeef).put<std::uint32_t>(1);  // junk list
+    b.put<std::uint16_t>(65535).put<std::int32_t>(-70000).put<std::uint32_t>(4000000000u).put<std::int8_t>(-128);
+    b.put(static_cast<double>(v.nx)).put(v.ny).put(v.nz);
+    b.put(v.r).put(static_cast<double>(v.g)).put(v.b).put(v.s).put(v.t);
+  }
+  // face 0: flags, the quad 0 1 2 3, one weight; face 1: flags, the triangle 3 2 1, no weight
+  b.put<std::uint8_t>(9).put<std::uint32_t>(4);
+  for (std::int16_t i : std::initializer_list<std::int16_t>{0, 1, 2, 3}) b.put(i);
+  b.put<std::uint8_t>(1).put(0.5);
+  b.put<std::uint8_t>(9).put<std::uint32_t>(3);
+  for (std::int16_t i : std::initializer_list<std::int16_t>{3, 2, 1}) b.put(i);
+  b.put<std::uint8_t>(0);
+  b.put<std::int32_t>(0).put<std::uint32_t>(1);  // edge
+  return all_types_ply(big ? "binary_big_endian" : "binary_little_endian") + b.str();
+}
+
+std::string all_types_ascii() {
+  std::string s = all_types_ply("ascii");
+  s += "2 1 2 7\n0 8\n";
+  s += "0.5 -1.25 3 -5 200 2 3735928559 1 65535 -70000 4000000000 -128 0 0 1 0 0.25 1 0.5 0.75\n";
+  s += "1e-3 2 -4 -5 200 0 65535 -70000 4000000000 -128 1 0 0 0.5 0.5 0.5 0 1\n";
+  s += "-2 0.125 32767 -5 200 0 65535 -70000 4000000000 -128 0 1 0 1 0 0 1 0\n";
+  s += "1e10 -0 -32768 -5 200 1 9 65535 -70000 4000000000 -128 0 0 -1 0.125 1 0 0.25 0.25\n";
+  s += "9 4 0 1 2 3 0\n";
+  s += "1 3 3 2 1 1 0.5\n";
+  s += "0 1\n";
+  return s;
+}
+
+void expect_all_types_mesh(const TriMesh& m, const ReadInfo& info) {
+  ASSERT_EQ(m.num_vertices(), 4u);
+  ASSERT_EQ(m.normals.size(), 4u);
+  ASSERT_EQ(m.colors.size(), 4u);
+  ASSERT_EQ(m.texcoords.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    const AllTypesVertex& v = kAllTypes[i];
+    EXPECT_EQ(bits(m.positions[i].x), bits(static_cast<float>(v.x))) << i;
+    EXPECT_EQ(bits(m.positions[i].y), bits(v.y)) << i;
+    EXPECT_EQ(m.positions[i].z, static_cast<float>(v.z)) << i;
+    EXPECT_EQ(m.normals[i], glm::vec3(v.nx, v.ny, static_cast<float>(v.nz))) << i;
+    EXPECT_EQ(m.colors[i], glm::vec3(v.r, v.g, v.b)) << i;
+    EXPECT_EQ(m.texcoords[i], glm::vec2(v.s, v.t)) << i;
+  }
+  EXPECT_EQ(m.indices, (std::vector<Index>{0, 1, 2, 0, 2, 3, 3, 2, 1}));
+  EXPECT_EQ(info.polygons_triangulated, 1u);
+}
+
+TEST(MeshIoPly, AllScalarTypesBothEndiannessesAndAscii) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_types");
+  const std::pair<const char*, std::string> files[] = {
+      {"le.ply", all_types_binary(false)}, {"be.ply", all_types_binary(true)}, {"ascii.ply", all_types_ascii()}};
+  for (const auto& [name, contents] : files) {
+    SCOPED_TRACE(name);
+    write_text(dir / name, contents);
+    ReadInfo info;
+    const TriMesh m = read_mesh((dir / name).string(), &info);
+    expect_all_types_mesh(m, info);
+  }
+}
+
+TEST(MeshIoPly, BigEndianRoundTripByHand) {
+  // The writer only emits little endian; a big-endian copy of the same mesh must read identically.
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_be");
+  const TriMesh mesh = awkward_mesh(true, true, true);
+  Bytes b(true);
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+    b.put(mesh.positions[v].x).put(mesh.positions[v].y).put(mesh.positions[v].z);
+    b.put(mesh.normals[v].x).put(mesh.normals[v].y).put(mesh.normals[v].z);
+    for (int k = 0; k < 3; ++k) b.put(static_cast<std::uint8_t>(std::lround(mesh.colors[v][k] * 255.0f)));
+    b.put(mesh.texcoords[v].x).put(mesh.texcoords[v].y);
+  }
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    b.put<std::uint8_t>(3).put(mesh.corner(f, 0)).put(mesh.corner(f, 1)).put(mesh.corner(f, 2));
+  const std::string header =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
+      "property uchar blue\nproperty float texture_u\nproperty float texture_v\nelement face 4\n"
+      "property list uchar uint vertex_indices\nend_header\n";
+  write_text(dir / "be.ply", header + b.str());
+  expect_identical(mesh, read_mesh((dir / "be.ply").string()));
+}
+
+TEST(MeshIoPly, CrLfHeaderAndColourGroupsAreOptional) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_crlf");
+  write_text(dir / "m.ply",
+             "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
+             "property float z\r\nproperty ushort red\r\nproperty ushort green\r\nproperty ushort blue\r\n"
+             "element face 1\r\nproperty list uchar int vertex_indices\r\nend_header\r\n"
+             "0 0 0 65535 0 0\r\n1 0 0 0 65535 0\r\n0 1 0 0 0 0\r\n3 0 1 2\r\n");
+  const TriMesh m = read_mesh((dir / "m.ply").string());
+  EXPECT_EQ(m.indices, (std::vector<Index>{0, 1, 2}));
+  EXPECT_EQ(m.colors[0], glm::vec3(1.0f, 0.0f, 0.0f));
+  EXPECT_EQ(m.colors[1], glm::vec3(0.0f, 1.0f, 0.0f));
+  EXPECT_FALSE(m.has_normals());
+}
+
+TEST(MeshIoPly, ElementWithoutPropertiesIsSkippedWhateverItsCount) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_empty_element");
+  const std::string head = "ply\nformat ascii 1.0\nelement nothing 1000000000000\nelement vertex 3\n"
+                           "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                           "property list uchar int vertex_indices\nend_header\n";
+  write_text(dir / "m.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(read_mesh((dir / "m.ply").string()).num_faces(), 1u);
+}
+
+// Hand-made strip: 0 1 2 3, restart, 4 5 6 6 7 8 (two degenerate joins).
+TEST(MeshIoPly, TriStripsAlternateOrientationRestartAndDropDegenerates) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_strips");
+  const std::vector<std::int32_t> strip = {0, 1, 2, 3, -1, 4, 5, 6, 6, 7, 8};
+  const std::vector<Index> expected = {0, 1, 2, 2, 1, 3, 4, 5, 6, 7, 6, 8};
+  std::string head = "ply\nformat %s 1.0\nelement vertex 9\nproperty float x\nproperty float y\nproperty float z\n"
+                     "element tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+  for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    SCOPED_TRACE(format);
+    std::string text = head;
+    text.replace(text.find("%s"), 2, format);
+    const bool ascii = std::string(format) == "ascii";
+    Bytes b(std::string(format) == "binary_big_endian");
+    for (int v = 0; v < 9; ++v) {
+      const float p[3] = {static_cast<float>(v % 3), static_cast<float>(v / 3), 0.0f};
+      if (ascii) {
+        text += std::to_string(v % 3) + " " + std::to_string(v / 3) + " 0\n";
+      } else {
+        b.put(p[0]).put(p[1]).put(p[2]);
+      }
+    }
+    if (ascii) {
+      text += std::to_string(strip.size());
+      for (std::int32_t s : strip) text += " " + std::to_string(s);
+      text += "\n";
+    } else {
+      b.put(static_cast<std::int32_t>(strip.size()));
+      for (std::int32_t s : strip) b.put(s);
+      text += b.str();
+    }
+    write_text(dir / "strip.ply", text);
+    ReadInfo info;
+    const TriMesh m = read_mesh((dir / "strip.ply").string(), &info);
+    EXPECT_EQ(m.indices, expected);
+    EXPECT_EQ(info.strip_degenerates_dropped, 2u);
+  }
+}
+
+TEST(MeshIoPly, HugeCountFailsBeforeAllocating) {
+  // 10^12 vertices of 12 bytes would need 12 TB; the check must come before any allocation.
+  try {
+    read_mesh(testing::test_data("bad/ply_huge_count_binary.ply"));
+    FAIL() << "no exception";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("larger than the file can hold"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MeshIoObj, NegativeIndicesAreRelative) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_negative");
+  write_text(dir / "m.obj",
+             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"
+             "v 1 1 0\nf -3 -1 -2\nf 2 -1 3\n");
+  const TriMesh m = read_mesh((dir / "m.obj").string());
+  EXPECT_EQ(m.indices, (std::vector<Index>{0, 1, 2, 1, 3, 2, 1, 3, 2}));
+}
+
+TEST(MeshIoObj, PolygonsAreFanTriangulatedAndCounted) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_polygons");
+  write_text(dir / "m.obj",
+             "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\n"
+             "f 1 2 3 4 5\nf 1 2 3\nf 5 4 3 2\n");
+  ReadInfo info;
+  const TriMesh m = read_mesh((dir / "m.obj").string(), &info);
+  EXPECT_EQ(m.num_faces(), 3u + 1u + 2u);
+  EXPECT_EQ(info.polygons_triangulated, 2u);
+  EXPECT_EQ(m.indices, (std::vector<Index>{0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 1, 2, 4, 3, 2, 4, 2, 1}));
+}
+
+TEST(MeshIoObj, CornerFormsAttributesAndConflicts) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_corners");
+  write_text(dir / "m.obj",
+             "mtllib m.mtl\no thing\ng part\ns 1\nusemtl red\n"
+             "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 5 5 5 # unreferenced, kept\n"
+             "vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5 0\nvt 1 0\n"
+             "vn 0 0 1\nvn 0 0 -1\n"
+             "f 1/1/1 2/2/1 3/3/1\n"
+             "f 2/5 4/4 3/3\n"     // vt 5 equals vt 2: not a conflict
+             "f 2//2 4//1 3//1\n"  // vertex 2 had vn 1: conflict
+             "f 4/1 3 2\n"         // vertex 4 had vt 4: conflict
+             "l 1 2\np 3\n");
+  ReadInfo info;
+  const TriMesh m = read_mesh((dir / "m.obj").string(), &info);
+  ASSERT_EQ(m.num_vertices(), 5u);
+  EXPECT_EQ(m.positions[4], glm::vec3(5.0f));
+  EXPECT_EQ(m.num_faces(), 4u);
+  ASSERT_TRUE(m.has_texcoords());
+  ASSERT_TRUE(m.has_normals());
+  EXPECT_EQ(m.texcoords[0], glm::vec2(0.0f, 0.0f));
+  EXPECT_EQ(m.texcoords[1], glm::vec2(1.0f, 0.0f));
+  EXPECT_EQ(m.texcoords[2], glm::vec2(0.0f, 1.0f));
+  EXPECT_EQ(m.texcoords[3], glm::vec2(0.5f, 0.5f));
+  EXPECT_EQ(m.texcoords[4], glm::vec2(0.0f, 0.0f));  // never given
+  EXPECT_EQ(m.normals[1], glm::vec3(0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(m.normals[3], glm::vec3(0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(info.attribute_conflicts, 2u);
+}
+
+TEST(MeshIoObj, ColoursWeightsForwardReferencesAndCrLf) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_misc");
+  write_text(dir / "c.obj", "v 0 0 0 1 0 0\r\nv 1 0 0 0 1 0\r\nv 0 1 0 0 0 0.5\r\nf 1 2 3\r\n");
+  const TriMesh c = read_mesh((dir / "c.obj").string());
+  ASSERT_TRUE(c.has_colors());
+  EXPECT_EQ(c.colors[2], glm::vec3(0.0f, 0.0f, 0.5f));
+  write_text(dir / "w.obj", "f 1 2 3\nv 0 0 0 1\nv +1 0 0 1\nv 0 1e-50 0 1\n");
+  const TriMesh w = read_mesh((dir / "w.obj").string());
+  EXPECT_FALSE(w.has_colors());
+  EXPECT_EQ(w.positions[1], glm::vec3(1.0f, 0.0f, 0.0f));
+  EXPECT_EQ(w.positions[2], glm::vec3(0.0f, 0.0f, 0.0f));  // underflow to zero is not an error
+  EXPECT_EQ(w.indices, (std::vector<Index>{0, 1, 2}));
+}
+
+TEST(MeshIoOff, VariantsColoursNormalsAndComments) {
+  const fs::path dir = testing::scratch_dir("mesh_io_off_variants");
+  write_text(dir / "c.off",
+             "# leading comment\nCOFF 4 2 5 # counts on the header line\n"
+             "0 0 0 255 0 0 255\n1 0 0 0 51 0\n\n# a blank line and a comment\n0 1 0 0 0 255 128\n1 1 0 10 20 30 40\n"
+             "4 0 1 3 2 255 0 0\n3 0 2 3\n");
+  ReadInfo info;
+  const TriMesh c = read_mesh((dir / "c.off").string(), &info);
+  ASSERT_EQ(c.num_vertices(), 4u);
+  EXPECT_EQ(c.indices, (std::vector<Index>{0, 1, 3, 0, 3, 2, 0, 2, 3}));
+  EXPECT_EQ(info.polygons_triangulated, 1u);
+  EXPECT_EQ(c.colors[0], glm::vec3(1.0f, 0.0f, 0.0f));
+  EXPECT_EQ(c.colors[1], glm::vec3(0.0f, 51.0f / 255.0f, 0.0f));
+  EXPECT_EQ(c.colors[3], glm::vec3(10.0f / 255.0f, 20.0f / 255.0f, 30.0f / 255.0f));
+
+  write_text(dir / "cn.off",
+             "CNOFF\n3 1 0\n0 0 0 0 0 1 0.5 0.25 1.0 1.0\n1 0 0 0 0 1 0 0 0.\n0 1 0 0 1 0 1e-1 0 0\n3 0 1 2\n");
+  const TriMesh cn = read_mesh((dir / "cn.off").string());
+  EXPECT_EQ(cn.normals[2], glm::vec3(0.0f, 1.0f, 0.0f));
+  EXPECT_EQ(cn.colors[0], glm::vec3(0.5f, 0.25f, 1.0f));
+  EXPECT_EQ(cn.colors[2], glm::vec3(0.1f, 0.0f, 0.0f));
+
+  write_text(dir / "st.off", "STOFF\n3 1\n0 0 0 0.5 1\n1 0 0 1 1\n0 1 0 0 0\n3 2 1 0\n");
+  const TriMesh st = read_mesh((dir / "st.off").string());
+  EXPECT_EQ(st.texcoords[0], glm::vec2(0.5f, 1.0f));
+  EXPECT_EQ(st.indices, (std::vector<Index>{2, 1, 0}));
+}
+
+TEST(MeshIoWrite, MissingFolderThrowsAndCreatesNothing) {
+  const fs::path dir = testing::scratch_dir("mesh_io_write_missing");
+  const TriMesh mesh = awkward_mesh(true, true, true);
+  for (const char* name : {"mesh.obj", "mesh.off", "mesh.ply"}) {
+    const fs::path target = dir / "no_such_folder" / name;
+    EXPECT_THROW(write_mesh(target.string(), mesh), IoError) << name;
+    EXPECT_FALSE(fs::exists(target.parent_path()));
+  }
+  EXPECT_TRUE(fs::is_empty(dir));
+}
+
+TEST(MeshIoWrite, InvalidMeshThrowsBeforeTouchingTheFile) {
+  const fs::path dir = testing::scratch_dir("mesh_io_write_invalid");
+  TriMesh bad = awkward_mesh(false, false, false);
+  bad.indices.push_back(0);
+  bad.indices.push_back(1);
+  bad.indices.push_back(17);  // out of range
+  for (const char* name : {"mesh.obj", "mesh.off", "mesh.ply"}) {
+    EXPECT_THROW(write_mesh((dir / name).string(), bad), InvalidInput) << name;
+  }
+  EXPECT_TRUE(fs::is_empty(dir));
+
+  // An existing file is left untouched by a failed write.
+  write_text(dir / "keep.ply", "old contents");
+  TriMesh nan_normal = awkward_mesh(true, false, false);
+  nan_normal.normals[2].y = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(write_mesh((dir / "keep.ply").string(), nan_normal), InvalidInput);
+  TriMesh bright = awkward_mesh(false, false, true);
+  bright.colors[1].x = 1.5f;
+  EXPECT_THROW(write_mesh((dir / "keep.ply").string(), bright), InvalidInput);
+  std::ifstream in(dir / "keep.ply");
+  const std::string kept((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(kept, "old contents");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+}
+
+TEST(MeshIoWrite, ObjCornerForms) {
+  const fs::path dir = testing::scratch_dir("mesh_io_write_obj_forms");
+  const std::pair<TriMesh, const char*> cases[] = {{awkward_mesh(false, false, false), "f 1 2 3\n"},
+                                                   {awkward_mesh(false, true, false), "f 1/1 2/2 3/3\n"},
+                                                   {awkward_mesh(true, false, false), "f 1//1 2//2 3//3\n"},
+                                                   {awkward_mesh(true, true, false), "f 1/1/1 2/2/2 3/3/3\n"}};
+  for (const auto& [mesh, first_face] : cases) {
+    write_mesh((dir / "m.obj").string(), mesh);
+    std::ifstream in(dir / "m.obj");
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_NE(text.find(first_face), std::string::npos) << first_face;
+  }
+}
+
+// Every bad fixture with an obj_/off_/ply_ prefix: IoError naming the file, the place and the reason.
+struct BadCase {
+  const char* file;
+  const char* where;   // ":<line>: " or " (byte <offset>): "
+  const char* reason;  // a substring of the reason
+};
+
+const BadCase kBadCases[] = {
+    {"obj_bad_corner.obj", ":4: ", "bad face corner '1/1/1/1'"},
+    {"obj_bad_number.obj", ":4: ", "bad number '1.5x' for vertex y"},
+    {"obj_colour_mixed.obj", ":2: ", "v has no colour but earlier v statements do"},
+    {"obj_colour_range.obj", ":1: ", "vertex colour component is outside [0, 1]"},
+    {"obj_index_garbage.obj", ":4: ", "bad vertex index in face corner 'three'"},
+    {"obj_index_out_of_range.obj", ":6: ", "face refers to vertex 4 but the file has 3 v statements"},
+    {"obj_index_zero.obj", ":4: ", "vertex index 0 is invalid"},
+    {"obj_inf.obj", ":2: ", "vertex z is not finite"},
+    {"obj_nan.obj", ":3: ", "vertex x is not finite"},
+    {"obj_no_faces.obj", ":5: ", "no faces"},
+    {"obj_normal_bad_number.obj", ":4: ", "bad number 'x' for normal z"},
+    {"obj_normal_out_of_range.obj", ":5: ", "face refers to normal 5 but the file has 1 vn statements"},
+    {"obj_overflow.obj", ":2: ", "vertex x is out of range"},
+    {"obj_relative_out_of_range.obj", ":4: ", "relative vertex index -4 is out of range"},
+    {"obj_texcoord_out_of_range.obj", ":5: ", "face refers to texcoord 2 but the file has 1 vt statements"},
+    {"obj_two_corners.obj", ":4: ", "face has 2 corners"},
+    {"obj_v_five_numbers.obj", ":1: ", "v statement has 5 numbers"},
+    {"obj_v_too_few.obj", ":2: ", "missing vertex z"},
+    {"off_bad_header.off", ":1: ", "not an OFF file"},
+    {"off_binary.off", ":1: ", "binary OFF is not supported"},
+    {"off_bad_number.off", ":4: ", "bad number '0..5' for vertex z"},
+    {"off_colour_range.off", ":3: ", "integer colour component outside 0..255"},
+    {"off_colour_without_coff.off", ":3: ", "unexpected text on a vertex line"},
+    {"off_empty.off", ":1: ", "empty file"},
+    {"off_huge_counts.off", ":3: ", "counts larger than the file can hold"},
+    {"off_huge_faces.off", ":2: ", "counts larger than the file can hold"},
+    {"off_index_out_of_range.off", ":6: ", "vertex index 3 out of range"},
+    {"off_missing_counts.off", ":2: ", "missing vertex count"},
+    {"off_nan.off", ":4: ", "vertex y is not finite"},
+    {"off_negative_count.off", ":2: ", "negative vertex count"},
+    {"off_negative_index.off", ":6: ", "vertex index -1 out of range"},
+    {"off_no_faces.off", ":2: ", "no faces"},
+    {"off_short_face.off", ":6: ", "face has 3 vertex indices but announces 4"},
+    {"off_truncated_faces.off", ":7: ", "truncated: expected 3 faces, found 1"},
+    {"off_truncated_vertices.off", ":6: ", "truncated: expected 5 vertices, found 3"},
+    {"off_two_corners.off", ":6: ", "face has 2 corners"},
+    {"off_unsupported_variant.off", ":1: ", "unsupported OFF variant '4OFF'"},
+    {"ply_bad_magic.ply", ":1: ", "not a PLY file"},
+    {"ply_bad_number_ascii.ply", ":12: ", "bad number '1.0.0'"},
+    {"ply_colour_out_of_range.ply", ":14: ", "vertex 1: float colour 'red' is outside [0, 1]"},
+    {"ply_float_indices.ply", ":8: ", "vertex indices must have an integer type"},
+    {"ply_huge_count_ascii.ply", ":7: ", "element face count 99999999999 is larger than the file can hold"},
+    {"ply_huge_count_binary.ply", ":4: ", "element vertex count 1000000000000 is larger than the file can hold"},
+    {"ply_index_out_of_range_ascii.ply", ":13: ", "face 0: vertex index 7 out of range"},
+    {"ply_index_out_of_range_binary.ply", " (byte 214): ", "face 0: vertex index 7 out of range"},
+    {"ply_index_out_of_range_binary_be.ply", " (byte 212): ", "face 0: vertex index 3 out of range"},
+    {"ply_inf_double_binary_be.ply", " (byte 209): ", "vertex 1: 'z' is not finite"},
+    {"ply_missing_end_header.ply", ":9: ", "no end_header line"},
+    {"ply_missing_z.ply", ":3: ", "element vertex has no property 'z'"},
+    {"ply_nan_ascii.ply", ":11: ", "vertex 1: 'y' is not finite"},
+    {"ply_nan_binary.ply", " (byte 185): ", "vertex 1: 'y' is not finite"},
+    {"ply_negative_list_count.ply", " (byte 203): ", "negative list count -1"},
+    {"ply_negative_list_count_ascii.ply", ":13: ", "negative list count -3"},
+    {"ply_no_faces.ply", ":7: ", "no faces (empty mesh)"},
+    {"ply_no_format.ply", ":8: ", "no format line"},
+    {"ply_no_vertex_indices.ply", ":7: ", "element face has no vertex_indices list"},
+    {"ply_partial_normal.ply", ":7: ", "vertex property 'nx' without the rest of its group"},
+    {"ply_property_before_element.ply", ":3: ", "property before any element"},
+    {"ply_strip_bad_index.ply", ":13: ", "strip 0: vertex index -2 out of range"},
+    {"ply_truncated_ascii.ply", ":14: ", "truncated body"},
+    {"ply_truncated_binary.ply", " (byte 206): ", "truncated body"},
+    {"ply_two_corners.ply", ":13: ", "face 0 has 2 corners"},
+    {"ply_uchar_out_of_range.ply", ":14: ", "value '300' for a vertex property is out of range for its type"},
+    {"ply_unknown_type.ply", ":4: ", "unknown property type 'float128'"},
+    {"ply_unsupported_format.ply", ":2: ", "unsupported PLY format 'binary_middle_endian'"},
+    {"ply_zero_faces.ply", ":7: ", "no faces (empty mesh)"},
+};
+
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.file; }
+
+class MeshIoBadFile : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(MeshIoBadFile, ThrowsIoErrorWithFilePlaceAndReason) {
+  const BadCase& c = GetParam();
+  const std::string path = testing::test_data(std::string("bad/") + c.file);
+  ASSERT_TRUE(fs::exists(path)) << path;
+  try {
+    read_mesh(path);
+    FAIL() << "no exception for " << c.file;
+  } catch (const IoError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.file(), path);
+    EXPECT_NE(what.find(path + c.where), std::string::npos) << what;
+    EXPECT_NE(what.find(c.reason), std::string::npos) << what;
+    EXPECT_TRUE(e.line() != IoError::kNoLine || e.byte_offset() != IoError::kNoOffset) << what;
+  }
+}
+
+std::string bad_case_name(const ::testing::TestParamInfo<BadCase>& info) {
+  std::string name = info.param.file;
+  std::replace(name.begin(), name.end(), '.', '_');
+  return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(MeshIo, MeshIoBadFile, ::testing::ValuesIn(kBadCases), bad_case_name);
+
+TEST(MeshIoBadFiles, EveryFixtureHasAnExpectation) {
+  std::set<std::string> listed;
+  for (const BadCase& c : kBadCases) listed.insert(c.file);
+  std::size_t found = 0;
+  for (const auto& entry : fs::directory_iterator(testing::test_data("bad"))) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("obj_", 0) != 0 && name.rfind("off_", 0) != 0 && name.rfind("ply_", 0) != 0) continue;
+    ++found;
+    EXPECT_TRUE(listed.count(name)) << name << " has no entry in kBadCases";
+  }
+  EXPECT_EQ(found, listed.size());
+}
+
+// Every truncation of a good binary PLY is rejected with an IoError (never a crash or a bogus mesh).
+TEST(MeshIoBadFiles, EveryTruncationOfABinaryPlyFails) {
+  const fs::path dir = testing::scratch_dir("mesh_io_truncations");
+  const std::string full = all_types_binary(false);
+  const std::size_t header = full.find("end_header\n") + 11;
+  write_text(dir / "t.ply", full);
+  ASSERT_NO_THROW(read_mesh((dir / "t.ply").string()));
+  std::size_t body_errors = 0;
+  for (std::size_t n = 0; n < full.size(); ++n) {
+    // A new name per cut: truncating a file in place makes ext4 flush it, which is slow.
+    const fs::path cut = dir / ("t" + std::to_string(n) + ".ply");
+    write_text(cut, full.substr(0, n));
+    try {
+      read_mesh(cut.string());
+      ADD_FAILURE() << "accepted a file cut at " << n;
+    } catch (const IoError& e) {
+      EXPECT_TRUE(e.line() != IoError::kNoLine || e.byte_offset() != IoError::kNoOffset) << e.what();
+      if (n > header && e.byte_offset() != IoError::kNoOffset) ++body_errors;
+    }
+  }
+  // Cuts deep enough into the body pass the header's size check and fail while reading, at a byte.
+  EXPECT_GT(body_errors, 0u);
+}
+
+// A small deterministic fuzzer: corrupted copies of good files either read as a valid mesh or throw
+// IoError; nothing else (no crash, no other exception, no runaway allocation).
+TEST(MeshIoBadFiles, CorruptedFilesReadOrThrowIoError) {
+  const fs::path dir = testing::scratch_dir("mesh_io_fuzz");
+  const TriMesh mesh = awkward_mesh(true, true, true);
+  std::vector<std::pair<std::string, std::string>> seeds;
+  for (const char* name : {"s.obj", "s.off", "s_bin.ply", "s_txt.ply"}) {
+    WriteOptions options;
+    options.binary = std::string(name) != "s_txt.ply";
+    write_mesh((dir / name).string(), mesh, options);
+    std::ifstream in(dir / name, std::ios::binary);
+    seeds.emplace_back(name, std::string((std::istreambuf_iterator<char>(in)), {}));
+  }
+  seeds.emplace_back("types_be.ply", all_types_binary(true));
+  seeds.emplace_back("types_txt.ply", all_types_ascii());
+  std::uint64_t state = 0x9e3779b97f4a7c15ull;
+  auto next = [&state] {  // xorshift64*
+    state ^= state >> 12;
+    state ^= state << 25;
+    state ^= state >> 27;
+    return state * 0x2545f4914f6cdd1dull;
+  };
+  const char kAlphabet[] = "0123456789-+.e /#\n\rnaxyzf v";
+  std::size_t accepted = 0, rejected = 0;
+  for (const auto& [name, contents] : seeds) {
+    for (int trial = 0; trial < 150; ++trial) {
+      std::string bytes = contents;
+      const int edits = 1 + static_cast<int>(next() % 4);
+      for (int e = 0; e < edits; ++e) {
+        const std::size_t at = next() % bytes.size();
+        switch (next() % 4) {
+          case 0: bytes[at] = static_cast<char>(next() & 0xff); break;
+          case 1: bytes[at] = kAlphabet[next() % (sizeof kAlphabet - 1)]; break;
+          case 2: bytes.erase(at, 1 + next() % 8); break;
+          default: bytes.insert(at, 1, kAlphabet[next() % (sizeof kAlphabet - 1)]); break;
+        }
+        if (bytes.empty()) bytes = "x";
+      }
+      const fs::path path = dir / (std::to_string(trial) + "_" + name);
+      write_text(path, bytes);
+      try {
+        const TriMesh m = read_mesh(path.string());
+        EXPECT_NO_THROW(m.validate());
+        EXPECT_GT(m.num_faces(), 0u);
+        ++accepted;
+      } catch (const IoError& e) {
+        EXPECT_TRUE(e.line() != IoError::kNoLine || e.byte_offset() != IoError::kNoOffset) << e.what();
+        ++rejected;
+      }
+    }
+  }
+  EXPECT_GT(rejected, 0u);
+  EXPECT_GT(accepted, 0u);
+}
+
+struct RealCase {
+  const char* file;
+  std::size_t vertices;
+  std::size_t faces;
+};
+
+void PrintTo(const RealCase& c, std::ostream* os) { *os << c.file; }
+
+class MeshIoReal : public ::testing::TestWithParam<RealCase> {};
+
+TEST_P(MeshIoReal, CountsMatch) {
+  VARMESH_REQUIRE_SHARED(path, std::string("meshes/") + GetParam().file);
+  const TriMesh m = read_mesh(path);
+  EXPECT_EQ(m.num_vertices(), GetParam().vertices);
+  EXPECT_EQ(m.num_faces(), GetParam().faces);
+  EXPECT_NO_THROW(m.validate());
+}
+
+const RealCase kRealCases[] = {
+    {"cow_viewpoint_2903v_tristrips.ply", 2903, 5804}, {"dragon_vrip_res4_5205v.ply", 5205, 11102},
+    {"bun_zipper_35947v.obj", 35947, 69451},           {"armadillo_cgal_26002v.off", 26002, 52000},
+    {"horse_quad_2400v.obj", 2400, 4796},              {"dragon_vrip_437645v_binary_le.ply", 437645, 871414},
+};
+
+std::string real_case_name(const ::testing::TestParamInfo<RealCase>& info) {
+  std::string name = info.param.file;
+  name = name.substr(0, name.find('.'));
+  return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(MeshIo, MeshIoReal, ::testing::ValuesIn(kRealCases), real_case_name);
+
+TEST(MeshIoRealData, HorseQuadsAreTriangulated) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/horse_quad_2400v.obj");
+  ReadInfo info;
+  const TriMesh m = read_mesh(path, &info);
+  EXPECT_EQ(info.polygons_triangulated, 2398u);
+}
+
+// The cow exists as triangle strips and as an OBJ of the same vertices: decoding the strips must give
+// the OBJ's triangles with the same orientation.
+TEST(MeshIoRealData, CowStripsMatchCowObj) {
+  VARMESH_REQUIRE_SHARED(strips_path, "meshes/cow_viewpoint_2903v_tristrips.ply");
+  VARMESH_REQUIRE_SHARED(obj_path, "meshes/cow_viewpoint_2903v.obj");
+  const TriMesh s = read_mesh(strips_path), o = read_mesh(obj_path);
+  ASSERT_EQ(s.positions, o.positions);
+  auto canonical = [](const TriMesh& m) {
+    std::set<std::array<Index, 3>> tris;
+    for (std::size_t f = 0; f < m.num_faces(); ++f) {
+      std::array<Index, 3> t = {m.corner(f, 0), m.corner(f, 1), m.corner(f, 2)};
+      std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());  // keeps orientation
+      tris.insert(t);
+    }
+    return tris;
+  };
+  EXPECT_EQ(canonical(s), canonical(o));
+}
+
+TEST(MeshIoRealData, DragonRoundTripsThroughEveryFormat) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/dragon_vrip_res4_5205v.ply");
+  const TriMesh m = read_mesh(path);
+  const fs::path dir = testing::scratch_dir("mesh_io_dragon_round_trip");
+  for (const char* name : {"d.obj", "d.off", "d.ply"}) {
+    write_mesh((dir / name).string(), m);
+    expect_identical(m, read_mesh((dir / name).string()));
+  }
+}
+
+}  // namespace
+}  // namespace varmesh

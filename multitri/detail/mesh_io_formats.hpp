@@ -1,0 +1,26 @@
+#pragma once
+/// Per-format readers and writers behind read_mesh / write_mesh (mesh_io.hpp). Internal.
+///
+/// Readers parse the whole file `data` (already in memory) and throw IoError naming `path` with a line
+/// (text) or byte offset (binary) and a reason, including "no faces" for a mesh without any face. The
+/// caller runs TriMesh::validate afterwards. `info` has been reset by the caller; readers add to it.
+/// Writers return the complete file contents; the caller validates the mesh first and writes atomically.
+#include <string>
+#include <string_view>
+
+#include "multitri/mesh_io.hpp"
+#include "multitri/tri_mesh.hpp"
+
+namespace varmesh::detail {
+
+TriMesh read_obj(const std::string& path, std::string_view data, ReadInfo& info);
+TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info);
+TriMesh read_ply(const std::string& path, std::string_view data, ReadInfo& info);
+
+std::string format_obj(const TriMesh& mesh);
+/// OFF, COFF, NOFF or CNOFF by the attributes present; texcoords are not written.
+std::string format_off(const TriMesh& mesh);
+/// Binary little endian (binary = true) or ascii PLY.
+std::string format_ply(const TriMesh& mesh, bool binary);
+
+}  // namespace varmesh::detail

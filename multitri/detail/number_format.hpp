@@ -1,0 +1,33 @@
+#pragma once
+/// Appending numbers to an output buffer for the text writers. Floats use std::to_chars' shortest form,
+/// which parses back (std::from_chars into float) to the identical bit pattern.
+#include <charconv>
+#include <cstdint>
+#include <string>
+
+namespace varmesh::detail {
+
+inline void append_float(std::string& out, float v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+/// Like append_float, but the text always reads as a float literal ("1.0", not "1"): OFF colours are
+/// integers 0..255 or floats 0..1, told apart by their spelling.
+inline void append_float_literal(std::string& out, float v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+  for (const char* c = buf; c != r.ptr; ++c)
+    if (*c == '.' || *c == 'e' || *c == 'E') return;
+  out += ".0";
+}
+
+inline void append_uint(std::string& out, std::uint64_t v) {
+  char buf[24];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+}  // namespace varmesh::detail

@@ -1,0 +1,217 @@
+#pragma once
+/// A forward scanner over an in-memory text file for the mesh readers: blanks, tokens, numbers and the
+/// 1-based line number of the current position, so that every error can name file:line.
+///
+/// Numbers are parsed with std::from_chars (locale independent, no allocation). A float token is parsed
+/// directly as float so that a shortest-form float written by std::to_chars reads back bit-exactly.
+#include <cfloat>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <system_error>
+
+#include "multitri/errors.hpp"
+
+namespace varmesh::detail {
+
+enum class NumberStatus { kOk, kMalformed, kNotFinite, kOutOfRange };
+
+inline const char* strip_plus(const char* first, const char* last) noexcept {
+  // from_chars rejects a leading '+', which some writers emit.
+  if (last - first >= 2 && first[0] == '+' && first[1] != '-' && first[1] != '+') return first + 1;
+  return first;
+}
+
+/// Parses the whole of `s` as a finite float. Values below the smallest subnormal become (signed) zero.
+inline NumberStatus parse_float(std::string_view s, float& out) noexcept {
+  const char* last = s.data() + s.size();
+  const char* first = strip_plus(s.data(), last);
+  auto [ptr, ec] = std::from_chars(first, last, out);
+  if (ec == std::errc::result_out_of_range) {
+    // libstdc++ reports underflow as out of range too; tell it apart from overflow through double.
+    double d = 0.0;
+    auto [dptr, dec] = std::from_chars(first, last, d);
+    if (dptr != last) return NumberStatus::kMalformed;
+    if (dec == std::errc()) {
+      if (std::fabs(d) > static_cast<double>(FLT_MAX)) return NumberStatus::kOutOfRange;
+      out = static_cast<float>(d);
+      return NumberStatus::kOk;
+    }
+    // Out of range even for double: the exponent's sign says which way.
+    const char* e = first;
+    while (e != last && *e != 'e' && *e != 'E') ++e;
+    if (e + 1 < last && e[1] == '-') {
+      out = *first == '-' ? -0.0f : 0.0f;
+      return NumberStatus::kOk;
+    }
+    return NumberStatus::kOutOfRange;
+  }
+  if (ec != std::errc() || ptr != last) return NumberStatus::kMalformed;
+  return std::isfinite(out) ? NumberStatus::kOk : NumberStatus::kNotFinite;
+}
+
+/// Parses the whole of `s` as a finite double.
+inline NumberStatus parse_double(std::string_view s, double& out) noexcept {
+  const char* last = s.data() + s.size();
+  const char* first = strip_plus(s.data(), last);
+  auto [ptr, ec] = std::from_chars(first, last, out);
+  if (ec == std::errc::result_out_of_range) {
+    if (ptr != last) return NumberStatus::kMalformed;
+    const char* e = first;
+    while (e != last && *e != 'e' && *e != 'E') ++e;
+    if (e + 1 < last && e[1] == '-') {
+      out = *first == '-' ? -0.0 : 0.0;
+      return NumberStatus::kOk;
+    }
+    return NumberStatus::kOutOfRange;
+  }
+  if (ec != std::errc() || ptr != last) return NumberStatus::kMalformed;
+  return std::isfinite(out) ? NumberStatus::kOk : NumberStatus::kNotFinite;
+}
+
+/// Parses the whole of `s` as a decimal integer that fits in int64.
+inline NumberStatus parse_int(std::string_view s, std::int64_t& out) noexcept {
+  const char* last = s.data() + s.size();
+  const char* first = strip_plus(s.data(), last);
+  auto [ptr, ec] = std::from_chars(first, last, out);
+  if (ec == std::errc::result_out_of_range) return NumberStatus::kOutOfRange;
+  if (ec != std::errc() || ptr != last) return NumberStatus::kMalformed;
+  return NumberStatus::kOk;
+}
+
+/// A short printable excerpt of a token for error messages.
+inline std::string quote(std::string_view s) {
+  constexpr std::size_t kMax = 32;
+  std::string out = "'";
+  for (std::size_t i = 0; i < s.size() && i < kMax; ++i) {
+    const unsigned char c = static_cast<unsigned char>(s[i]);
+    out += (c >= 32 && c < 127) ? static_cast<char>(c) : '?';
+  }
+  if (s.size() > kMax) out += "...";
+  out += "'";
+  return out;
+}
+
+class TextCursor {
+ public:
+  /// `comment` (0 = none) starts a comment that runs to the end of the line when it begins a token.
+  TextCursor(std::string_view text, const std::string& file, char comment = '\0') noexcept
+      : begin_(text.data()), p_(text.data()), end_(text.data() + text.size()), file_(file), comment_(comment) {}
+
+  bool at_end() const noexcept { return p_ == end_; }
+  std::size_t line() const noexcept { return line_; }
+  std::size_t offset() const noexcept { return static_cast<std::size_t>(p_ - begin_); }
+  std::size_t remaining() const noexcept { return static_cast<std::size_t>(end_ - p_); }
+  const std::string& file() const noexcept { return file_; }
+
+  static bool is_blank(char c) noexcept { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+  /// Skips blanks on the current line (not the newline).
+  void skip_blanks() noexcept {
+    while (p_ != end_ && is_blank(*p_)) ++p_;
+  }
+
+  /// True when only blanks or a comment remain on the current line.
+  bool at_eol() noexcept {
+    skip_blanks();
+    return p_ == end_ || *p_ == '\n' || (comment_ != '\0' && *p_ == comment_);
+  }
+
+  /// Moves to the start of the next line (or the end of the text).
+  void next_line() noexcept {
+    const void* nl = std::memchr(p_, '\n', static_cast<std::size_t>(end_ - p_));
+    if (nl == nullptr) {
+      p_ = end_;
+    } else {
+      p_ = static_cast<const char*>(nl) + 1;
+      ++line_;
+    }
+  }
+
+  /// Skips blank and comment-only lines; false when the text ends first.
+  bool skip_empty_lines() noexcept {
+    for (;;) {
+      if (!at_eol()) return true;
+      if (p_ == end_) return false;
+      next_line();
+    }
+  }
+
+  /// The next token of the current line; empty at the end of the line.
+  std::string_view token() noexcept {
+    if (at_eol()) return {};
+    const char* start = p_;
+    while (p_ != end_ && !is_blank(*p_) && *p_ != '\n') ++p_;
+    return {start, static_cast<std::size_t>(p_ - start)};
+  }
+
+  /// The next token, crossing line ends (and comment lines); empty at the end of the text.
+  std::string_view token_any_line() noexcept {
+    if (!skip_empty_lines()) return {};
+    return token();
+  }
+
+  /// The rest of the current line, without the line end, trimmed of trailing blanks.
+  std::string_view rest_of_line() noexcept {
+    skip_blanks();
+    const char* start = p_;
+    const void* nl = std::memchr(p_, '\n', static_cast<std::size_t>(end_ - p_));
+    const char* stop = nl ? static_cast<const char*>(nl) : end_;
+    p_ = stop;
+    while (stop != start && is_blank(stop[-1])) --stop;
+    return {start, static_cast<std::size_t>(stop - start)};
+  }
+
+  [[noreturn]] void fail(const std::string& reason) const { throw IoError(file_, reason, line_); }
+
+  /// Throws for a token that did not parse: names the token and what was expected.
+  [[noreturn]] void fail_number(NumberStatus status, std::string_view tok, const char* what) const {
+    if (tok.empty()) fail(std::string("missing ") + what + (p_ == end_ ? " (file truncated?)" : ""));
+    switch (status) {
+      case NumberStatus::kNotFinite: fail(std::string(what) + " is not finite: " + quote(tok));
+      case NumberStatus::kOutOfRange: fail(std::string(what) + " is out of range: " + quote(tok));
+      default: fail(std::string("bad number ") + quote(tok) + " for " + what);
+    }
+  }
+
+  /// Reads the next token of the line as a finite float.
+  float read_float(const char* what) {
+    const std::string_view tok = token();
+    float v = 0.0f;
+    const NumberStatus s = tok.empty() ? NumberStatus::kMalformed : parse_float(tok, v);
+    if (s != NumberStatus::kOk) fail_number(s, tok, what);
+    return v;
+  }
+
+  /// Reads the next token of the line as a finite double.
+  double read_double(const char* what) {
+    const std::string_view tok = token();
+    double v = 0.0;
+    const NumberStatus s = tok.empty() ? NumberStatus::kMalformed : parse_double(tok, v);
+    if (s != NumberStatus::kOk) fail_number(s, tok, what);
+    return v;
+  }
+
+  /// Reads the next token of the line as an integer.
+  std::int64_t read_int(const char* what) {
+    const std::string_view tok = token();
+    std::int64_t v = 0;
+    const NumberStatus s = tok.empty() ? NumberStatus::kMalformed : parse_int(tok, v);
+    if (s != NumberStatus::kOk) fail_number(s, tok, what);
+    return v;
+  }
+
+ private:
+  const char* begin_;
+  const char* p_;
+  const char* end_;
+  const std::string& file_;
+  char comment_;
+  std::size_t line_ = 1;
+};
+
+}  // namespace varmesh::detail
