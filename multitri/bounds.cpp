@@ -8,8 +8,10 @@ namespace varmesh {
 Sphere enclose(const Sphere& a, const Sphere& b) noexcept {
   const glm::vec3 d = b.center - a.center;
   const float dist = glm::length(d);
-  if (dist + b.radius <= a.radius) return a;
-  if (dist + a.radius <= b.radius) return b;
+  // A contained sphere still inflates the result by a relative 1e-6: nested spheres must stay nested
+  // after float rounding of the distances computed from them (monotone criteria depend on it).
+  if (dist + b.radius <= a.radius) return {a.center, a.radius * (1.0f + 1e-6f) + 1e-12f};
+  if (dist + a.radius <= b.radius) return {b.center, b.radius * (1.0f + 1e-6f) + 1e-12f};
   const float r = 0.5f * (dist + a.radius + b.radius);
   // Centre moves from a towards b so that both spheres touch the new one from inside; a tiny relative
   // slack keeps containment true after float rounding.

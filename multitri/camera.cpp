@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+
+#include "multitri/errors.hpp"
 
 namespace varmesh {
 
@@ -43,14 +47,32 @@ Frustum Camera::frustum() const {
 
 Camera frame_sphere(const glm::vec3& center, float radius, const glm::vec3& dir, float fov_y_deg, float aspect,
                     const glm::vec3& up) {
+  const float dir_len = glm::length(dir);
+  if (!(radius > 0.0f) || !std::isfinite(radius))
+    throw InvalidInput("frame_sphere: radius " + std::to_string(radius) + " is not a positive number");
+  if (!(dir_len > 0.0f) || !std::isfinite(dir_len) || !std::isfinite(center.x) || !std::isfinite(center.y) ||
+      !std::isfinite(center.z))
+    throw InvalidInput("frame_sphere: the centre is not finite or the view direction is zero");
+  if (!(fov_y_deg > 0.0f && fov_y_deg < 180.0f) || !(aspect > 0.0f) || !std::isfinite(aspect))
+    throw InvalidInput("frame_sphere: fov_y_deg must be in (0, 180) and aspect > 0");
   Camera cam;
   cam.fov_y_deg = fov_y_deg;
   cam.aspect = aspect;
   const float half = glm::radians(fov_y_deg) * 0.5f * std::min(1.0f, aspect);
   const float dist = radius / std::sin(half);
+  const glm::vec3 forward = dir / dir_len;
   cam.target = center;
-  cam.eye = center - glm::normalize(dir) * dist;
+  cam.eye = center - forward * dist;
+  // lookAt needs an up vector that is not parallel to the view direction; a top view of a terrain with the
+  // default +z up is the common case. Fall back to the world axis least aligned with the view (y first).
   cam.up = up;
+  const float up_len = glm::length(up);
+  if (!(glm::length(glm::cross(forward, up)) > 1e-3f * up_len)) {
+    const glm::vec3 a = glm::abs(forward);
+    cam.up = a.y <= a.x && a.y <= a.z ? glm::vec3(0.0f, 1.0f, 0.0f)
+             : a.x <= a.z             ? glm::vec3(1.0f, 0.0f, 0.0f)
+                                      : glm::vec3(0.0f, 0.0f, 1.0f);
+  }
   cam.z_near = std::max(dist - radius * 1.5f, dist * 1e-3f);
   cam.z_far = dist + radius * 1.5f;
   return cam;

@@ -44,7 +44,10 @@ struct Camera {
 };
 
 /// Frames a bounding sphere: camera looking at `center` from direction `dir` (need not be unit) so that
-/// the sphere fills the view; z_near/z_far set around it.
+/// the sphere fills the view; z_near/z_far set around it. When `up` is parallel to `dir` (a top view with
+/// the default +z up) the world axis least aligned with `dir` is used instead (+y first). Throws
+/// InvalidInput when radius <= 0, dir is zero, fov_y_deg is not in (0, 180) or aspect <= 0 (or any is not
+/// finite).
 Camera frame_sphere(const glm::vec3& center, float radius, const glm::vec3& dir, float fov_y_deg, float aspect,
                     const glm::vec3& up = {0.0f, 0.0f, 1.0f});
 

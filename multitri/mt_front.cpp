@@ -35,7 +35,15 @@ void MtFront::remove_face(FaceId f) {
   slot_[f] = kInvalid;
 }
 
+void MtFront::check_node(NodeId n, const char* move) const {
+  if (n >= mt_->num_nodes())
+    throw InvalidInput(std::string("MtFront::") + move + ": node " + std::to_string(n) + " is not a node of the Mt (" +
+                           std::to_string(mt_->num_nodes()) + " nodes)",
+                       n);
+}
+
 void MtFront::apply(NodeId n) {
+  check_node(n, "apply");
   if (!can_apply(n))
     throw InvalidInput("MtFront::apply: node " + std::to_string(n) +
                            (applied_[n] ? " is already applied" : " has a parent that is not applied"),
@@ -49,6 +57,7 @@ void MtFront::apply(NodeId n) {
 }
 
 void MtFront::undo(NodeId n) {
+  check_node(n, "undo");
   if (!can_undo(n))
     throw InvalidInput("MtFront::undo: node " + std::to_string(n) +
                            (n == 0 ? " is the source"
@@ -96,6 +105,14 @@ void MtFront::validate() const {
       if (!applied_[p]) fail("node " + std::to_string(n) + " is applied but its parent " + std::to_string(p) + " is not", n);
   }
   if (count != num_applied_) fail("applied count is stale", count);
+  // The O(1) legality counters agree with the applied flags.
+  for (NodeId n = 0; n < mt.num_nodes(); ++n) {
+    Index missing = 0, applied_children = 0;
+    for (NodeId p : mt.parents(n)) missing += applied_[p] ? 0 : 1;
+    for (NodeId c : mt.children(n)) applied_children += applied_[c] ? 1 : 0;
+    if (missing != missing_parents_[n] || applied_children != applied_children_[n])
+      fail("node " + std::to_string(n) + " has stale parent/child counters", n);
+  }
   std::size_t expected = 0;
   for (FaceId f = 0; f < mt.num_faces(); ++f) {
     const bool in = applied_[mt.creator(f)] && (mt.destroyer(f) == kInvalid || !applied_[mt.destroyer(f)]);

@@ -7,6 +7,7 @@
 ///
 /// Moves: apply/undo are single legal steps (they throw InvalidInput when illegal); refine/coarsen force
 /// what they need (refining applies missing ancestors first, coarsening undoes applied descendants first).
+/// All four throw InvalidInput naming the node when it is not a node of the Mt.
 /// Cost: O(faces changed) per node, O(1) legality tests.
 #include <cstddef>
 #include <span>
@@ -83,6 +84,7 @@ class MtFront {
   }
 
  private:
+  void check_node(NodeId n, const char* move) const;
   void add_face(FaceId f);
   void remove_face(FaceId f);
 
@@ -98,6 +100,7 @@ class MtFront {
 
 template <class Sink>
 void MtFront::refine(NodeId n, Sink&& sink) {
+  check_node(n, "refine");
   if (applied_[n]) return;
   stack_.clear();
   stack_.push_back(n);
@@ -124,6 +127,7 @@ void MtFront::refine(NodeId n, Sink&& sink) {
 
 template <class Sink>
 void MtFront::coarsen(NodeId n, Sink&& sink) {
+  check_node(n, "coarsen");
   if (!applied_[n] || n == 0) return;
   stack_.clear();
   stack_.push_back(n);

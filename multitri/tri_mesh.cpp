@@ -35,6 +35,13 @@ void TriMesh::validate() const {
   if (!normals.empty() && normals.size() != n) throw InvalidInput("normals.size() != positions.size()");
   if (!texcoords.empty() && texcoords.size() != n) throw InvalidInput("texcoords.size() != positions.size()");
   if (!colors.empty() && colors.size() != n) throw InvalidInput("colors.size() != positions.size()");
+  for (std::size_t v = 0; v < normals.size(); ++v)
+    if (!finite(normals[v])) throw InvalidInput("vertex normal is not finite", v);
+  for (std::size_t v = 0; v < texcoords.size(); ++v)
+    if (!std::isfinite(texcoords[v].x) || !std::isfinite(texcoords[v].y))
+      throw InvalidInput("vertex texture coordinate is not finite", v);
+  for (std::size_t v = 0; v < colors.size(); ++v)
+    if (!finite(colors[v])) throw InvalidInput("vertex colour is not finite", v);
 }
 
 Box3 TriMesh::bounds() const noexcept {
