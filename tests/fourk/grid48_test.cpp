@@ -176,7 +176,9 @@ TEST(Grid48, UpdateFromAnyEarlierFrontEqualsExtract) {
     ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "step " << i;
     for (Index p = 0; p < g.num_points(); ++p)
       ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "step " << i << " point " << p;
-    if (q.triangle_budget) EXPECT_LE(fresh.num_faces(), q.triangle_budget);
+    if (q.triangle_budget) {
+      EXPECT_LE(fresh.num_faces(), q.triangle_budget);
+    }
   }
 }
 
