@@ -489,7 +489,15 @@ void Grid48Front::descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, 
 QueryStats Grid48Front::extract_fast(const Query& q) {
   if (q.triangle_budget != 0 || q.time_budget_ms > 0.0) return extract(*this, q);
   QueryStats stats;
-  std::fill(refined_.begin(), refined_.end(), std::uint8_t{0});
+  // Output-sensitive reset: after an extract_fast with no move since, only the diamonds it evaluated can
+  // be non-zero.
+  if (touched_valid_) {
+    for (Index p : touched_) refined_[p] = 0;
+  } else {
+    std::fill(refined_.begin(), refined_.end(), std::uint8_t{0});
+  }
+  touched_.clear();
+  touched_valid_ = false;
   const Grid48& g = *grid_;
   const std::uint32_t lw = static_cast<std::uint32_t>(g.lattice_width());
   std::size_t refined = 0, evaluated = 0;
@@ -501,6 +509,7 @@ QueryStats Grid48Front::extract_fast(const Query& q) {
     const float e = q.criterion.threshold();
     auto wants = [&](Index m, std::uint32_t, std::uint32_t) {
       ++evaluated;
+      touched_.push_back(m);
       const bool w = g.error(m) > e;
       refined += w;
       return w;
@@ -510,6 +519,7 @@ QueryStats Grid48Front::extract_fast(const Query& q) {
     const float sx = g.spacing_x(), sy = g.spacing_y();
     auto wants = [&](Index m, std::uint32_t mx, std::uint32_t my) {
       ++evaluated;
+      touched_.push_back(m);
       const ElementBound b{{float(mx) * sx, float(my) * sy, g.height_at(m)}, g.radius(m), g.error(m), {}};
       const bool w = q.wants(b);
       refined += w;
@@ -520,15 +530,16 @@ QueryStats Grid48Front::extract_fast(const Query& q) {
   std::size_t faces = 2 * g.tiles_x() * g.tiles_y();
   bool ideal = true;
   const bool check = !q.criterion.is_monotone();
-  for (Index p = 0; p < refined_.size(); ++p) {
+  for (Index p : touched_) {
     if (refined_[p] == 2) {
       refined_[p] = 0;
-    } else if (refined_[p] == 1) {
+    } else {
       faces += static_cast<std::size_t>(g.num_triangles(p));
       if (check) g.for_each_parent(p, [&](Index par) { ideal = ideal && refined_[par] != 0; });
     }
   }
   if (!ideal) return extract(*this, q);  // non-monotone criterion: the generic least fixpoint
+  touched_valid_ = true;
   num_refined_ = refined;
   num_faces_ = faces;
   sets_valid_ = false;
@@ -717,6 +728,7 @@ void Grid48Front::coarsen_one(Index p) {
                        p);
   if (!sets_valid_) rebuild_sets();
   refined_[p] = 0;
+  touched_valid_ = false;
   on_coarsened(p);
   --num_refined_;
   num_faces_ -= static_cast<std::size_t>(grid_->num_triangles(p));

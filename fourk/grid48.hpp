@@ -218,6 +218,8 @@ class Grid48Front {
   // 0: not refined; 1: refined. During extract_fast, 2 marks "evaluated, not wanted".
   std::vector<std::uint8_t> refined_;
   mutable std::vector<Index> vertex_of_point_;  // to_mesh scratch, all kInvalid between calls
+  std::vector<Index> touched_;  // diamonds the last extract_fast evaluated (a superset of the refined ones)
+  bool touched_valid_ = false;  // true while nothing but extract_fast changed refined_
   std::size_t num_faces_ = 0;
   std::size_t num_refined_ = 0;
   std::vector<Index> stack_;
@@ -385,6 +387,7 @@ void Grid48Front::refine(Index p, Sink&& sink) {
     if (!pushed) {
       stack_.pop_back();
       refined_[t] = 1;
+      touched_valid_ = false;
       on_refined(t);
       ++num_refined_;
       num_faces_ += static_cast<std::size_t>(grid_->num_triangles(t));
