@@ -236,15 +236,7 @@ std::string format_off(const TriMesh& mesh) {
     }
     out += '\n';
   }
-  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
-    out += "3 ";
-    append_uint(out, mesh.corner(f, 0));
-    out += ' ';
-    append_uint(out, mesh.corner(f, 1));
-    out += ' ';
-    append_uint(out, mesh.corner(f, 2));
-    out += '\n';
-  }
+  append_triangle_lines(out, mesh);
   return out;
 }
 

@@ -715,15 +715,7 @@ std::string format_ply(const TriMesh& mesh, bool binary) {
     }
     out += '\n';
   }
-  for (std::size_t f = 0; f < nf; ++f) {
-    out += "3 ";
-    append_uint(out, mesh.corner(f, 0));
-    out += ' ';
-    append_uint(out, mesh.corner(f, 1));
-    out += ' ';
-    append_uint(out, mesh.corner(f, 2));
-    out += '\n';
-  }
+  append_triangle_lines(out, mesh);
   return out;
 }
 

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include "multitri/tri_mesh.hpp"
+
 namespace varmesh::detail {
 
 inline void append_float(std::string& out, float v) {
@@ -28,6 +30,19 @@ inline void append_uint(std::string& out, std::uint64_t v) {
   char buf[24];
   const auto r = std::to_chars(buf, buf + sizeof buf, v);
   out.append(buf, r.ptr);
+}
+
+/// One line "3 a b c" per face: the face list shared by OFF and ascii PLY.
+inline void append_triangle_lines(std::string& out, const TriMesh& mesh) {
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    out += "3 ";
+    append_uint(out, mesh.corner(f, 0));
+    out += ' ';
+    append_uint(out, mesh.corner(f, 1));
+    out += ' ';
+    append_uint(out, mesh.corner(f, 2));
+    out += '\n';
+  }
 }
 
 }  // namespace varmesh::detail
