@@ -31,16 +31,6 @@ std::uint64_t read_count(TextCursor& cur, const char* what) {
   return static_cast<std::uint64_t>(v);
 }
 
-// Saturating arithmetic for the "does the file hold that many elements" check.
-std::uint64_t sat_mul(std::uint64_t a, std::uint64_t b) {
-  std::uint64_t r;
-  return __builtin_mul_overflow(a, b, &r) ? UINT64_MAX : r;
-}
-std::uint64_t sat_add(std::uint64_t a, std::uint64_t b) {
-  std::uint64_t r;
-  return __builtin_add_overflow(a, b, &r) ? UINT64_MAX : r;
-}
-
 glm::vec3 read_color(TextCursor& cur, std::string_view* toks, int n) {
   if (n != 3 && n != 4) cur.fail("vertex colour has " + std::to_string(n) + " components (expected 3 or 4)");
   bool is_float = false;

@@ -106,15 +106,6 @@ struct PlyHeader {
   const PlyElement* vertex = nullptr;
 };
 
-std::uint64_t sat_mul(std::uint64_t a, std::uint64_t b) {
-  std::uint64_t r;
-  return __builtin_mul_overflow(a, b, &r) ? UINT64_MAX : r;
-}
-std::uint64_t sat_add(std::uint64_t a, std::uint64_t b) {
-  std::uint64_t r;
-  return __builtin_add_overflow(a, b, &r) ? UINT64_MAX : r;
-}
-
 PlyHeader parse_header(const std::string& path, std::string_view data) {
   TextCursor cur(data, path);
   PlyHeader h;

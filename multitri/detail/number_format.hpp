@@ -32,6 +32,16 @@ inline void append_uint(std::string& out, std::uint64_t v) {
   out.append(buf, r.ptr);
 }
 
+/// Saturating arithmetic for the readers' "does the file hold that many elements" checks.
+inline std::uint64_t sat_mul(std::uint64_t a, std::uint64_t b) {
+  std::uint64_t r;
+  return __builtin_mul_overflow(a, b, &r) ? UINT64_MAX : r;
+}
+inline std::uint64_t sat_add(std::uint64_t a, std::uint64_t b) {
+  std::uint64_t r;
+  return __builtin_add_overflow(a, b, &r) ? UINT64_MAX : r;
+}
+
 /// One line "3 a b c" per face: the face list shared by OFF and ascii PLY.
 inline void append_triangle_lines(std::string& out, const TriMesh& mesh) {
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
