@@ -198,20 +198,10 @@ std::string format_off(const TriMesh& mesh) {
   append_uint(out, mesh.num_faces());
   out += " 0\n";
   for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
-    const glm::vec3& p = mesh.positions[v];
-    append_float(out, p.x);
-    out += ' ';
-    append_float(out, p.y);
-    out += ' ';
-    append_float(out, p.z);
+    append_vec3(out, mesh.positions[v]);
     if (mesh.has_normals()) {
-      const glm::vec3& n = mesh.normals[v];
       out += ' ';
-      append_float(out, n.x);
-      out += ' ';
-      append_float(out, n.y);
-      out += ' ';
-      append_float(out, n.z);
+      append_vec3(out, mesh.normals[v]);
     }
     if (mesh.has_colors()) {
       // Float RGBA, spelled as floats so that a reader cannot take them for 0..255 integers.

@@ -674,20 +674,10 @@ std::string format_ply(const TriMesh& mesh, bool binary) {
 
   out.reserve(out.size() + nv * 40 + nf * 24);
   for (std::size_t v = 0; v < nv; ++v) {
-    const glm::vec3& p = mesh.positions[v];
-    append_float(out, p.x);
-    out += ' ';
-    append_float(out, p.y);
-    out += ' ';
-    append_float(out, p.z);
+    append_vec3(out, mesh.positions[v]);
     if (normals) {
-      const glm::vec3& n = mesh.normals[v];
       out += ' ';
-      append_float(out, n.x);
-      out += ' ';
-      append_float(out, n.y);
-      out += ' ';
-      append_float(out, n.z);
+      append_vec3(out, mesh.normals[v]);
     }
     if (colors) {
       const glm::vec3& c = mesh.colors[v];

@@ -32,6 +32,15 @@ inline void append_uint(std::string& out, std::uint64_t v) {
   out.append(buf, r.ptr);
 }
 
+/// Appends "x y z" (shortest round-trip floats, single spaces).
+inline void append_vec3(std::string& out, const glm::vec3& v) {
+  append_float(out, v.x);
+  out += ' ';
+  append_float(out, v.y);
+  out += ' ';
+  append_float(out, v.z);
+}
+
 /// Saturating arithmetic for the readers' "does the file hold that many elements" checks.
 inline std::uint64_t sat_mul(std::uint64_t a, std::uint64_t b) {
   std::uint64_t r;

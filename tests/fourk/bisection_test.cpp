@@ -14,6 +14,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "mt_oracles.hpp"
 #include <glm/geometric.hpp>
 
 #include "multitri/errors.hpp"
@@ -200,20 +202,7 @@ TEST(BisectionTetrahedron, LevelFrontsMatchEq4) {
   EXPECT_EQ(count_level_fronts(mt6).total.to_string(), "18446744078004584724");
 }
 
-// Slow oracle: every subset of the non-source nodes that is closed under parents.
-std::uint64_t brute_force_fronts(const Mt& mt) {
-  const std::size_t n = mt.num_nodes() - 1;
-  std::uint64_t count = 0;
-  for (std::uint64_t s = 0; s < (std::uint64_t(1) << n); ++s) {
-    bool ok = true;
-    for (NodeId v = 1; v <= n && ok; ++v)
-      if (s >> (v - 1) & 1u)
-        for (NodeId p : mt.parents(v))
-          if (p != 0 && !(s >> (p - 1) & 1u)) ok = false;
-    count += ok;
-  }
-  return count;
-}
+using varmesh::testing::brute_force_fronts;
 
 // Second oracle: walks the fronts one by one (parents-first numbering: include v only if its parents are
 // in), so its cost is O(nodes * fronts).

@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "mt_oracles.hpp"
+
 #include "multitri/errors.hpp"
 #include "multitri/mt_front.hpp"
 
@@ -279,19 +281,7 @@ Mt random_mt(std::mt19937& rng, int num_ops) {
   return std::move(b).build();
 }
 
-std::uint64_t brute_force_fronts(const Mt& mt) {
-  const std::size_t n = mt.num_nodes() - 1;
-  std::uint64_t count = 0;
-  for (std::uint64_t s = 0; s < (std::uint64_t(1) << n); ++s) {
-    bool ok = true;
-    for (NodeId v = 1; v <= n && ok; ++v)
-      if (s >> (v - 1) & 1u)
-        for (NodeId p : mt.parents(v))
-          if (p != 0 && !(s >> (p - 1) & 1u)) ok = false;
-    count += ok;
-  }
-  return count;
-}
+using varmesh::testing::brute_force_fronts;
 
 // Longest path from the source by plain recursion.
 Index slow_level(const Mt& mt, NodeId n) {
