@@ -1,0 +1,1 @@
+#include "fourk/fourk_mesh.hpp"

@@ -1,0 +1,1 @@
+#include "fourk/simplify4k.hpp"

@@ -1,0 +1,2 @@
+#include "fourk/adaptive.hpp"
+#include <gtest/gtest.h>

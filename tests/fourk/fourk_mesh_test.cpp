@@ -1,0 +1,2 @@
+#include "fourk/fourk_mesh.hpp"
+#include <gtest/gtest.h>

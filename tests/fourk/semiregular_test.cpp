@@ -1,0 +1,2 @@
+#include "fourk/semiregular.hpp"
+#include <gtest/gtest.h>

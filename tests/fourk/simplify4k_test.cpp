@@ -1,0 +1,2 @@
+#include "fourk/simplify4k.hpp"
+#include <gtest/gtest.h>
