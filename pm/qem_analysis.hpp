@@ -1,0 +1,68 @@
+#pragma once
+/// Analysis phase (Kim-Lee section 4.2): full-edge collapses ordered by Garland-Heckbert 1997 quadrics,
+/// recorded as a VertexHierarchy.
+///
+/// Each step collapses the cheapest legal edge (vt, vu) into a new vertex vs placed at the quadric's
+/// minimiser (Quadric::optimal_on_segment: the linear solve when well conditioned, else the best point of
+/// the edge). Legal means:
+/// - link condition: the common neighbours of vt and vu are exactly the apexes of the edge's faces (two, or
+///   one on a border edge), and an interior edge does not join two border vertices (Hoppe et al. 1993);
+/// - no duplicate face appears (the tetrahedron case) and the component keeps at least 4 vertices;
+/// - no face around vt or vu turns over or becomes degenerate at vs's position (normals keep a positive dot
+///   product);
+/// - neither end is locked, and the new node's subtree stays within the depth budget of the 64-bit keys.
+/// Border edges get GH97 border constraint quadrics (weight options.border_penalty). With colours
+/// (options.use_colors and input colours), GH98 attribute quadrics in (x, y, z, w r, w g, w b) order the
+/// collapses and place colour too.
+///
+/// Node bounds for the view criteria: sphere = enclosing sphere of the children's spheres and vs's
+/// position (a leaf's sphere covers its incident faces); cone = merged cone of the children's cones and the
+/// normals of the faces around vs; error = max(children's errors, distance bound) where the distance bound
+/// is sqrt of vs's unit-weight plane quadric (an upper bound of the distance from vs to every original face
+/// plane in its region, GH97 section 5). All three are nested by construction.
+#include <cstddef>
+#include <functional>
+#include <limits>
+
+#include "multitri/tri_mesh.hpp"
+#include "pm/manifold_input.hpp"
+#include "pm/vertex_hierarchy.hpp"
+
+namespace varmesh {
+
+struct QemOptions {
+  /// Stop when this many vertices remain (0: no vertex target).
+  std::size_t target_vertices = 0;
+  /// Stop when at most this many faces remain (0: no face target).
+  std::size_t target_faces = 0;
+  /// Stop before a collapse whose error (object units, as in the node bound) exceeds this.
+  double max_error = std::numeric_limits<double>::infinity();
+  /// With no target at all the analysis goes down to the smallest base mesh it can reach.
+  double border_penalty = 1000.0;
+  bool use_colors = false;     ///< GH98 attribute quadrics when the input has colours
+  double color_weight = 1.0;   ///< colour unit = color_weight * bounding-box diagonal
+  NonManifoldPolicy non_manifold = NonManifoldPolicy::kSplit;
+  /// Deepest tree allowed (node ids need depth + 1 bits; the tree ids take the rest of the 64 bits).
+  int max_depth = 44;
+  /// Called every 4096 collapses with (collapses done, vertices left); may be empty.
+  std::function<void(std::size_t, std::size_t)> progress;
+};
+
+struct QemStats {
+  std::size_t collapses = 0;
+  std::size_t rejected_link = 0, rejected_flip = 0, rejected_depth = 0, rejected_locked = 0;
+  std::size_t queue_rebuilds = 0;  ///< extra passes over all edges once the queue ran dry
+  std::size_t base_vertices = 0, base_faces = 0;
+  double seconds = 0.0;
+};
+
+/// Builds the hierarchy of `mesh` (repaired as manifold_input.hpp says). Throws InvalidInput on invalid
+/// input (naming the element) or options (naming the option). O(n log n) for n faces.
+VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& options = {}, QemStats* stats = nullptr);
+
+/// The mesh M^i after the first `collapses` collapses of the hierarchy (the plain PM order): vertices are
+/// node positions indexed by node id (all nodes; unused ones are simply unreferenced), faces the original
+/// faces that survive, relabelled. O(nodes + faces).
+TriMesh mesh_after_collapses(const VertexHierarchy& h, std::size_t collapses);
+
+}  // namespace varmesh

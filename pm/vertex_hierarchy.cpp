@@ -1,0 +1,188 @@
+// Derived arrays of a vertex hierarchy (parents, face creators, roots, base faces, <tree-id, node-id> keys
+// of Kim-Lee 2001 section 4.3) and its self-check.
+#include "pm/vertex_hierarchy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <glm/geometric.hpp>
+
+#include "multitri/errors.hpp"
+
+namespace varmesh {
+
+namespace {
+
+[[noreturn]] void bad(const std::string& what) { throw InvalidInput("vertex hierarchy: " + what); }
+
+}  // namespace
+
+int VertexHierarchy::depth(Index v) const noexcept {
+  const std::uint64_t mask = (node_bits_ >= 64) ? ~0ull : ((1ull << node_bits_) - 1ull);
+  return static_cast<int>(std::bit_width(keys_[v].value & mask)) - 1;
+}
+
+std::size_t VertexHierarchy::memory_bytes() const noexcept {
+  return positions_.size() * sizeof(glm::vec3) + colors_.size() * sizeof(glm::vec3) + parent_.size() * sizeof(Index) +
+         records_.size() * sizeof(CollapseRecord) + faces_.size() * sizeof(Index) + face_creator_.size() * sizeof(Index) +
+         roots_.size() * sizeof(Index) + base_faces_.size() * sizeof(Index) + bounds_.size() * sizeof(ElementBound) +
+         (ring_offsets_.size() + ring_items_.size()) * sizeof(Index) + keys_.size() * sizeof(NodeKey);
+}
+
+VertexHierarchy VertexHierarchyBuilder::finish(Raw raw) {
+  VertexHierarchy h;
+  const std::size_t nl = raw.num_leaves;
+  const std::size_t nn = raw.positions.size();
+  const std::size_t nc = raw.records.size();
+  if (nl == 0) bad("no leaf");
+  if (nn != nl + nc) bad("positions: " + std::to_string(nn) + " nodes for " + std::to_string(nl) + " leaves and " + std::to_string(nc) + " collapses");
+  if (nn >= kInvalid) bad("too many nodes");
+  if (!raw.colors.empty() && raw.colors.size() != nn) bad("colors: wrong count");
+  if (raw.bounds.size() != nn) bad("bounds: wrong count");
+  if (raw.faces.size() % 3 != 0 || raw.faces.empty()) bad("faces: count not a positive multiple of 3");
+  const std::size_t nf = raw.faces.size() / 3;
+  if (raw.ring_offsets.size() != nc + 1 || raw.ring_offsets[0] != 0 || raw.ring_offsets.back() != raw.ring_items.size())
+    bad("stored rings: offsets inconsistent");
+  if (raw.leaf_to_input.size() != nl) bad("leaf_to_input: wrong count");
+  if (raw.face_to_input.size() != nf) bad("face_to_input: wrong count");
+  if (!raw.locked.empty() && raw.locked.size() != nl) bad("locked: wrong count");
+  for (std::size_t i = 0; i < raw.faces.size(); ++i)
+    if (raw.faces[i] >= nl) bad("face " + std::to_string(i / 3) + ": corner is not a leaf");
+  for (std::size_t v = 0; v < nn; ++v) {
+    const glm::vec3& p = raw.positions[v];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) bad("node " + std::to_string(v) + ": position not finite");
+    const ElementBound& b = raw.bounds[v];
+    if (!(b.radius >= 0.0f) || !std::isfinite(b.radius) || !(b.error >= 0.0f) || !std::isfinite(b.error))
+      bad("node " + std::to_string(v) + ": bound not finite or negative");
+  }
+
+  h.parent_.assign(nn, kInvalid);
+  h.face_creator_.assign(nf, kInvalid);
+  for (std::size_t i = 0; i < nc; ++i) {
+    const CollapseRecord& r = raw.records[i];
+    const Index vs = static_cast<Index>(nl + i);
+    const std::string name = "collapse " + std::to_string(i) + " (node " + std::to_string(vs) + ")";
+    for (Index c : {r.vt, r.vu}) {
+      if (c >= vs) bad(name + ": child " + std::to_string(c) + " is not an earlier node");
+      if (h.parent_[c] != kInvalid) bad(name + ": child " + std::to_string(c) + " already has parent " + std::to_string(h.parent_[c]));
+      h.parent_[c] = vs;
+    }
+    if (r.vt == r.vu) bad(name + ": both children are node " + std::to_string(r.vt));
+    if (r.vl_hat == kInvalid && r.vr_hat == kInvalid) bad(name + ": no cut vertex");
+    if ((r.vl_hat == kInvalid) != (r.fl_hat == kInvalid) || (r.vr_hat == kInvalid) != (r.fr_hat == kInvalid))
+      bad(name + ": cut vertex and face disagree");
+    for (Index c : {r.vl_hat, r.vr_hat})
+      if (c != kInvalid && c >= nl) bad(name + ": cut vertex " + std::to_string(c) + " is not a leaf");
+    for (Index f : {r.fl_hat, r.fr_hat}) {
+      if (f == kInvalid) continue;
+      if (f >= nf) bad(name + ": face " + std::to_string(f) + " out of range");
+      if (h.face_creator_[f] != kInvalid) bad(name + ": face " + std::to_string(f) + " already created by node " + std::to_string(h.face_creator_[f]));
+      h.face_creator_[f] = vs;
+    }
+    if (r.fl_hat != kInvalid && r.fl_hat == r.fr_hat) bad(name + ": fl and fr are the same face");
+    for (Index f : r.fn)
+      if (f != kInvalid && f >= nf) bad(name + ": neighbour face " + std::to_string(f) + " out of range");
+  }
+  for (Index item : raw.ring_items)
+    if (item >= nn) bad("stored ring item " + std::to_string(item) + " out of range");
+
+  for (std::size_t v = 0; v < nn; ++v)
+    if (h.parent_[v] == kInvalid) h.roots_.push_back(static_cast<Index>(v));
+
+  // Depth of every node: parents come after children, so walk the nodes from the last one down.
+  std::vector<std::uint16_t> depth(nn, 0);
+  int max_depth = 0;
+  for (std::size_t v = nn; v-- > 0;) {
+    const Index p = h.parent_[v];
+    if (p != kInvalid) {
+      depth[v] = static_cast<std::uint16_t>(std::min<int>(depth[p] + 1, 65535));
+      max_depth = std::max<int>(max_depth, depth[v]);
+    }
+  }
+  const int node_bits = max_depth + 1;
+  const int tree_bits = h.roots_.size() <= 1 ? 0 : static_cast<int>(std::bit_width(h.roots_.size() - 1));
+  if (node_bits + tree_bits > 64)
+    bad("tree depth " + std::to_string(max_depth) + " with " + std::to_string(h.roots_.size()) + " trees needs " +
+        std::to_string(node_bits + tree_bits) + " bits, more than the 64 of a node key");
+  h.node_bits_ = node_bits;
+  h.keys_.assign(nn, NodeKey{});
+  for (std::size_t t = 0; t < h.roots_.size(); ++t)
+    h.keys_[h.roots_[t]].value = (node_bits >= 64 ? 0ull : (static_cast<std::uint64_t>(t) << node_bits)) | 1ull;
+  for (std::size_t v = nn; v-- > nl;) {
+    const CollapseRecord& r = raw.records[v - nl];
+    const std::uint64_t k = h.keys_[v].value;
+    const std::uint64_t tree = node_bits >= 64 ? 0ull : (k >> node_bits) << node_bits;
+    const std::uint64_t node = k ^ tree;
+    h.keys_[r.vt].value = tree | (node << 1);
+    h.keys_[r.vu].value = tree | ((node << 1) | 1ull);
+  }
+
+  // Base faces: corners with three distinct roots.
+  std::vector<Index> root_of(nl);
+  {
+    std::vector<Index> top(nn);
+    for (std::size_t v = nn; v-- > 0;) top[v] = h.parent_[v] == kInvalid ? static_cast<Index>(v) : top[h.parent_[v]];
+    for (std::size_t l = 0; l < nl; ++l) root_of[l] = top[l];
+  }
+  for (std::size_t f = 0; f < nf; ++f) {
+    const Index a = root_of[raw.faces[3 * f]], b = root_of[raw.faces[3 * f + 1]], c = root_of[raw.faces[3 * f + 2]];
+    const bool alive = a != b && b != c && a != c;
+    if (alive != (h.face_creator_[f] == kInvalid))
+      bad("face " + std::to_string(f) + (alive ? " survives in the base mesh but is created by a collapse"
+                                               : " is not in the base mesh and no collapse creates it"));
+    if (alive) h.base_faces_.push_back(static_cast<Index>(f));
+  }
+
+  h.num_leaves_ = nl;
+  h.positions_ = std::move(raw.positions);
+  h.colors_ = std::move(raw.colors);
+  h.records_ = std::move(raw.records);
+  h.faces_ = std::move(raw.faces);
+  h.bounds_ = std::move(raw.bounds);
+  h.ring_offsets_ = std::move(raw.ring_offsets);
+  h.ring_items_ = std::move(raw.ring_items);
+  h.leaf_to_input_ = std::move(raw.leaf_to_input);
+  h.face_to_input_ = std::move(raw.face_to_input);
+  h.locked_ = std::move(raw.locked);
+  h.repair_ = raw.repair;
+  h.validate();
+  return h;
+}
+
+void VertexHierarchy::validate() const {
+  auto fail = [](const std::string& what) { throw std::logic_error("VertexHierarchy::validate: " + what); };
+  const std::size_t nn = num_nodes();
+  for (std::size_t v = num_leaves_; v < nn; ++v) {
+    const CollapseRecord& r = records_[v - num_leaves_];
+    const std::string name = "node " + std::to_string(v);
+    if (parent_[r.vt] != v || parent_[r.vu] != v) fail(name + ": children's parent is not the node");
+    if (!is_ancestor_or_self(static_cast<Index>(v), r.vt) || !is_ancestor_or_self(static_cast<Index>(v), r.vu) ||
+        is_ancestor_or_self(r.vt, r.vu) || is_ancestor_or_self(r.vt, static_cast<Index>(v)))
+      fail(name + ": keys disagree with the tree");
+    for (Index c : {r.vt, r.vu}) {
+      const ElementBound &pb = bounds_[v], &cb = bounds_[c];
+      if (cb.error > pb.error) fail(name + ": child " + std::to_string(c) + " has a larger error");
+      const float slack = 1e-4f * (pb.radius + glm::length(pb.center)) + 1e-6f;
+      if (glm::length(cb.center - pb.center) + cb.radius > pb.radius + slack)
+        fail(name + ": sphere of child " + std::to_string(c) + " is not inside");
+    }
+    // fl^ = (vt-part, vu-part, vl^): one corner under vt, one under vu, the third is vl^.
+    auto check_face = [&](Index f, Index cut) {
+      if (f == kInvalid) return;
+      const auto c = face(f);
+      int under_t = 0, under_u = 0, is_cut = 0;
+      for (Index x : c) {
+        under_t += is_ancestor_or_self(r.vt, x);
+        under_u += is_ancestor_or_self(r.vu, x);
+        is_cut += x == cut;
+      }
+      if (under_t != 1 || under_u != 1 || is_cut != 1) fail(name + ": face " + std::to_string(f) + " is not (vt, vu, cut)");
+    };
+    check_face(r.fl_hat, r.vl_hat);
+    check_face(r.fr_hat, r.vr_hat);
+  }
+}
+
+}  // namespace varmesh

@@ -1,0 +1,185 @@
+#pragma once
+/// The vertex hierarchy of a progressive mesh (Hoppe 1997; Kim-Lee 2001, sections 3-4): the record of a
+/// sequence of full-edge collapses ecol_i(vs, vt, vu, vl, vr) from the original mesh M^ to a base mesh M^0.
+///
+/// Numbering. Leaves 0 .. num_leaves()-1 are the vertices of the original mesh M^ (after the repair of
+/// manifold_input.hpp; leaf_to_input() maps them back). Collapse i creates node vs = num_leaves() + i, the
+/// parent of its two children vt and vu. Roots (nodes without a parent) are the vertices of the base mesh.
+/// Original faces are numbered 0 .. num_faces()-1 and never renumbered: a face of any selectively refined
+/// mesh *is* an original face whose three corners currently have three distinct active ancestors (section
+/// 4.2), so face ids are stable across every scheme and operation.
+///
+/// Per collapse (Kim-Lee section 4.2): vt, vu, the fundamental cut vertices vl^, vr^ (leaves: corners of the
+/// original faces fl^, fr^ that became fl, fr), the original faces fl^, fr^ (kInvalid on the border side);
+/// Hoppe 1997's four neighbour faces fn0..fn3 (original face ids; kInvalid where absent) and Xia-Varshney
+/// 1996's stored 1-ring of vs in M^i (node ids), so that the three schemes of sr_mesh.hpp can run on one
+/// hierarchy. Per node: position (and colour), a bounding sphere and normal cone of its region, an error
+/// (object units), and the 64-bit <tree-id, node-id> key of section 4.3.
+///
+/// Invariants (validate()): parent/children consistent, children created before parents, keys consistent
+/// with the tree shape, bounds nested (child sphere inside parent sphere up to rounding, child error <=
+/// parent error, child cone inside parent cone), faces' corners are leaves, fl^/fr^ contain vl^/vr^ and one
+/// descendant of each child.
+#include <array>
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "multitri/bounds.hpp"
+#include "multitri/types.hpp"
+
+namespace varmesh {
+
+/// One edge collapse ecol_i(vs, vt, vu, vl, vr) with the topological details of the three schemes.
+struct CollapseRecord {
+  Index vt = kInvalid, vu = kInvalid;          ///< children of vs (node ids)
+  Index vl_hat = kInvalid, vr_hat = kInvalid;  ///< fundamental cut vertices (leaves); kInvalid on a border side
+  Index fl_hat = kInvalid, fr_hat = kInvalid;  ///< original faces (vt, vu, vl) and (vu, vt, vr) at collapse time
+  std::array<Index, 4> fn{kInvalid, kInvalid, kInvalid, kInvalid};  ///< Hoppe 1997: faces across fl's edges
+  ///< (vu,vl), (vl,vt) then fr's edges (vt,vr), (vr,vu), as original face ids; kInvalid across a border
+};
+
+/// <tree-id, node-id> packing of Kim-Lee section 4.3. The node part is a heap index (root 1, children 2k and
+/// 2k+1) of node_bits bits; the tree part (a root's index) sits above it.
+struct NodeKey {
+  std::uint64_t value = 0;
+};
+
+/// O(1) ancestor test by shifts (Kim-Lee section 4.3): is a an ancestor of b (or b itself)?
+/// `node_bits` is VertexHierarchy::node_bits().
+inline bool is_ancestor_or_self(NodeKey a, NodeKey b, int node_bits) noexcept {
+  if ((a.value >> node_bits) != (b.value >> node_bits)) return false;
+  const std::uint64_t mask = (node_bits >= 64) ? ~0ull : ((1ull << node_bits) - 1ull);
+  const std::uint64_t na = a.value & mask, nb = b.value & mask;
+  const int la = static_cast<int>(std::bit_width(na)), lb = static_cast<int>(std::bit_width(nb));
+  return la <= lb && (nb >> (lb - la)) == na;
+}
+
+/// How the input was turned into the manifold original mesh M^ (manifold_input.hpp fills it).
+struct InputRepairReport {
+  std::size_t input_vertices = 0, input_faces = 0;
+  std::size_t unreferenced_vertices = 0;  ///< dropped
+  std::size_t degenerate_faces = 0;       ///< dropped (a repeated corner)
+  std::size_t duplicate_faces = 0;        ///< dropped (same three corners as an earlier face, any order)
+  std::size_t nonmanifold_edge_faces = 0; ///< faces detached from an edge used by > 2 faces or twice in one direction
+  std::size_t nonmanifold_vertices = 0;   ///< vertices whose face fans were split into separate copies
+  std::size_t added_vertex_copies = 0;    ///< leaves created by the two splits above
+  std::size_t locked_vertices = 0;        ///< copies locked (NonManifoldPolicy::kLock): never collapsed
+};
+
+/// The immutable hierarchy. Built by build_vertex_hierarchy (qem_analysis.hpp), saved and loaded by
+/// hierarchy_io.hpp; read by SrMesh (sr_mesh.hpp) and the dual-piece oracle (dual_pieces.hpp).
+class VertexHierarchy {
+ public:
+  std::size_t num_leaves() const noexcept { return num_leaves_; }
+  std::size_t num_nodes() const noexcept { return positions_.size(); }
+  std::size_t num_collapses() const noexcept { return records_.size(); }
+  std::size_t num_faces() const noexcept { return faces_.size() / 3; }
+  std::size_t num_roots() const noexcept { return roots_.size(); }
+
+  bool is_leaf(Index v) const noexcept { return v < num_leaves_; }
+  /// Collapse record of a non-leaf node vs (vs >= num_leaves()).
+  const CollapseRecord& record(Index vs) const noexcept { return records_[vs - num_leaves_]; }
+  Index parent(Index v) const noexcept { return parent_[v]; }
+  Index vt(Index vs) const noexcept { return record(vs).vt; }
+  Index vu(Index vs) const noexcept { return record(vs).vu; }
+  Index sibling(Index v) const noexcept {
+    const Index p = parent_[v];
+    return p == kInvalid ? kInvalid : (vt(p) == v ? vu(p) : vt(p));
+  }
+  /// Original face f: three leaves, counter-clockwise.
+  std::array<Index, 3> face(Index f) const noexcept { return {faces_[3 * f], faces_[3 * f + 1], faces_[3 * f + 2]}; }
+  std::span<const Index> face_corners() const noexcept { return faces_; }
+  /// The node whose vsplit creates original face f (the vs whose fl^ or fr^ is f); kInvalid for base faces.
+  Index face_creator(Index f) const noexcept { return face_creator_[f]; }
+  std::span<const Index> roots() const noexcept { return roots_; }
+  /// Base mesh M^0: original faces whose corners have three distinct roots, relabelled by the roots.
+  std::span<const Index> base_faces() const noexcept { return base_faces_; }
+
+  const glm::vec3& position(Index v) const noexcept { return positions_[v]; }
+  std::span<const glm::vec3> positions() const noexcept { return positions_; }
+  bool has_colors() const noexcept { return !colors_.empty(); }
+  const glm::vec3& color(Index v) const noexcept { return colors_[v]; }
+  std::span<const glm::vec3> colors() const noexcept { return colors_; }
+  /// Sphere, cone and error of node v (nested: a parent's bound contains its children's).
+  const ElementBound& bound(Index v) const noexcept { return bounds_[v]; }
+  /// Xia-Varshney 1996 topological detail: the 1-ring of vs in M^i right after collapse i.
+  std::span<const Index> stored_ring(Index vs) const noexcept {
+    const std::size_t i = vs - num_leaves_;
+    return {ring_items_.data() + ring_offsets_[i], ring_items_.data() + ring_offsets_[i + 1]};
+  }
+
+  NodeKey key(Index v) const noexcept { return keys_[v]; }
+  int node_bits() const noexcept { return node_bits_; }
+  /// O(1): is a an ancestor of b, or b itself (Kim-Lee section 4.3)?
+  bool is_ancestor_or_self(Index a, Index b) const noexcept {
+    return varmesh::is_ancestor_or_self(keys_[a], keys_[b], node_bits_);
+  }
+  /// Depth of v below its root (0 for a root). O(1).
+  int depth(Index v) const noexcept;
+  /// Largest depth of any node.
+  int max_depth() const noexcept { return node_bits_ - 1; }
+
+  /// Leaf -> vertex of the mesh given to the analysis (several leaves may share one when a non-manifold
+  /// vertex was split); original face -> input face.
+  std::span<const Index> leaf_to_input() const noexcept { return leaf_to_input_; }
+  std::span<const Index> face_to_input() const noexcept { return face_to_input_; }
+  /// Leaves that the analysis was told never to collapse (non-manifold copies under NonManifoldPolicy::kLock).
+  bool is_locked(Index leaf) const noexcept { return !locked_.empty() && locked_[leaf] != 0; }
+  const InputRepairReport& repair_report() const noexcept { return repair_; }
+
+  /// Throws std::logic_error naming the first broken invariant (see the header comment). O(nodes + faces).
+  void validate() const;
+  /// Bytes held by the arrays the synthesis phase reads.
+  std::size_t memory_bytes() const noexcept;
+
+ private:
+  friend class VertexHierarchyBuilder;
+  friend struct HierarchyFileAccess;
+
+  std::size_t num_leaves_ = 0;
+  std::vector<glm::vec3> positions_;
+  std::vector<glm::vec3> colors_;
+  std::vector<Index> parent_;
+  std::vector<CollapseRecord> records_;
+  std::vector<Index> faces_;
+  std::vector<Index> face_creator_;
+  std::vector<Index> roots_;
+  std::vector<Index> base_faces_;
+  std::vector<ElementBound> bounds_;
+  std::vector<Index> ring_offsets_{0}, ring_items_;
+  std::vector<NodeKey> keys_;
+  int node_bits_ = 1;
+  std::vector<Index> leaf_to_input_, face_to_input_;
+  std::vector<std::uint8_t> locked_;
+  InputRepairReport repair_;
+};
+
+/// Assembles a VertexHierarchy from its raw arrays and derives the rest (parents, face creators, roots,
+/// base faces, keys). Used by the analysis and by the file reader; finish() validates.
+class VertexHierarchyBuilder {
+ public:
+  struct Raw {
+    std::size_t num_leaves = 0;
+    std::vector<glm::vec3> positions;  ///< per node
+    std::vector<glm::vec3> colors;     ///< per node or empty
+    std::vector<CollapseRecord> records;
+    std::vector<Index> faces;          ///< 3 leaves per original face
+    std::vector<ElementBound> bounds;  ///< per node
+    std::vector<Index> ring_offsets{0}, ring_items;
+    std::vector<Index> leaf_to_input, face_to_input;
+    std::vector<std::uint8_t> locked;  ///< per leaf or empty
+    InputRepairReport repair;
+  };
+  /// Throws InvalidInput naming the element when the arrays do not describe a hierarchy (wrong sizes,
+  /// indices out of range, a node with two parents, children after parents, a tree deeper than 62 levels
+  /// together with the tree ids in 64 bits, fl^/fr^ inconsistent with the tree).
+  static VertexHierarchy finish(Raw raw);
+};
+
+}  // namespace varmesh

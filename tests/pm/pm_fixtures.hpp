@@ -1,0 +1,90 @@
+#pragma once
+// Small generated meshes for the pm tests: runnable anywhere (no shared data needed).
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <utility>
+
+#include <glm/geometric.hpp>
+
+#include "multitri/tri_mesh.hpp"
+
+namespace varmesh::testing {
+
+/// Unit icosphere: the icosahedron with `levels` 1-to-4 subdivisions, vertices projected to the sphere.
+inline TriMesh make_icosphere(int levels) {
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  TriMesh m;
+  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
+               3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+  for (auto& p : m.positions) p = glm::normalize(p);
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<Index, Index>, Index> mid;
+    auto midpoint = [&](Index a, Index b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      m.positions.push_back(glm::normalize(m.positions[a] + m.positions[b]));
+      const Index v = static_cast<Index>(m.positions.size() - 1);
+      mid.emplace(key, v);
+      return v;
+    };
+    std::vector<Index> next;
+    for (std::size_t f = 0; f < m.num_faces(); ++f) {
+      const Index a = m.indices[3 * f], b = m.indices[3 * f + 1], c = m.indices[3 * f + 2];
+      const Index ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+      next.insert(next.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
+    }
+    m.indices = std::move(next);
+  }
+  return m;
+}
+
+/// Regular grid of (n+1) x (m+1) vertices on z = f(x, y) over [0,1]^2, alternating diagonals; has a border.
+inline TriMesh make_grid(int n, int m, float bump = 0.2f) {
+  TriMesh g;
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const float x = static_cast<float>(i) / static_cast<float>(n), y = static_cast<float>(j) / static_cast<float>(m);
+      g.positions.push_back({x, y, bump * std::sin(3.0f * x) * std::cos(2.0f * y) + 0.05f * x * y});
+    }
+  auto id = [&](int i, int j) { return static_cast<Index>(j * (n + 1) + i); };
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      if ((i + j) % 2 == 0) g.indices.insert(g.indices.end(), {a, b, c, a, c, d});
+      else g.indices.insert(g.indices.end(), {a, b, d, b, c, d});
+    }
+  return g;
+}
+
+/// Torus (genus 1) with n x m quads split in two.
+inline TriMesh make_torus(int n, int m, float R = 1.0f, float r = 0.35f) {
+  TriMesh g;
+  const float two_pi = 2.0f * std::numbers::pi_v<float>;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const float u = two_pi * static_cast<float>(i) / static_cast<float>(n), v = two_pi * static_cast<float>(j) / static_cast<float>(m);
+      g.positions.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+    }
+  auto id = [&](int i, int j) { return static_cast<Index>(((j + m) % m) * n + (i + n) % n); };
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      g.indices.insert(g.indices.end(), {a, b, c, a, c, d});
+    }
+  return g;
+}
+
+/// Concatenation of two meshes (several components).
+inline TriMesh concat(const TriMesh& a, const TriMesh& b, glm::vec3 offset) {
+  TriMesh m = a;
+  const Index base = static_cast<Index>(m.positions.size());
+  for (const auto& p : b.positions) m.positions.push_back(p + offset);
+  for (Index i : b.indices) m.indices.push_back(base + i);
+  return m;
+}
+
+}  // namespace varmesh::testing
