@@ -1,2 +1,853 @@
+// Tests of fourk/semiregular.hpp: the maximum matching (against brute force and a Tutte-Berge
+// certificate), the pairing of mesh faces with leftovers on the border, and the semi-regular 4-8
+// hierarchy (Velho-Gomes 2000, sections 6.2, 7.2, 8.1) as a Multi-Triangulation: valences per level,
+// conforming fronts, face counts, round trips, query fronts, agreement with build_bisection_mt, eq. 4.
 #include "fourk/semiregular.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+
+#include "mt_oracles.hpp"
+#include "test_support.hpp"
+
+#include "fourk/bisection.hpp"
+#include "multitri/errors.hpp"
+#include "multitri/mesh_io.hpp"
+#include "multitri/mt_front.hpp"
+#include "multitri/mt_metrics.hpp"
+#include "multitri/query.hpp"
+
+namespace varmesh {
+namespace {
+
+using Tri = std::array<VertexId, 3>;
+
+Tri canonical(Tri t) {
+  while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+  return t;
+}
+
+// --- generated meshes ----------------------------------------------------------------------------------
+
+TriMesh torus(int nu, int nv) {
+  TriMesh m;
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const float u = 6.2831853f * float(i) / float(nu), v = 6.2831853f * float(j) / float(nv);
+      m.positions.push_back({std::cos(u) * (2.0f + 0.7f * std::cos(v)), std::sin(u) * (2.0f + 0.7f * std::cos(v)),
+                             0.7f * std::sin(v)});
+    }
+  auto id = [&](int i, int j) { return static_cast<Index>(((j + nv) % nv) * nu + (i + nu) % nu); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+    }
+  return m;
+}
+
+// A polar disc: a fan of k triangles around the centre, then `rings` - 1 rings of k quads cut in two.
+// k + 2k(rings - 1) faces: odd when k is odd.
+TriMesh disc(int k, int rings) {
+  TriMesh m;
+  m.positions.push_back({0, 0, 0});
+  for (int r = 1; r <= rings; ++r)
+    for (int i = 0; i < k; ++i) {
+      const float a = 6.2831853f * float(i) / float(k) + 0.3f * float(r);
+      m.positions.push_back({float(r) * std::cos(a), float(r) * std::sin(a), 0.0f});
+    }
+  auto id = [&](int r, int i) { return static_cast<Index>(1 + (r - 1) * k + (i % k)); };
+  for (int i = 0; i < k; ++i) m.indices.insert(m.indices.end(), {0, id(1, i), id(1, i + 1)});
+  for (int r = 1; r < rings; ++r)
+    for (int i = 0; i < k; ++i) {
+      const Index a = id(r, i), b = id(r + 1, i), c = id(r + 1, i + 1), d = id(r, i + 1);
+      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+    }
+  return m;
+}
+
+// Convex hull of points in convex position by brute force over triples (small meshes only).
+TriMesh hull(const std::vector<glm::vec3>& p) {
+  TriMesh m;
+  m.positions = p;
+  const auto n = static_cast<Index>(p.size());
+  for (Index i = 0; i < n; ++i)
+    for (Index j = i + 1; j < n; ++j)
+      for (Index k = j + 1; k < n; ++k) {
+        const glm::vec3 nrm = glm::cross(p[j] - p[i], p[k] - p[i]);
+        int above = 0, below = 0;
+        for (Index l = 0; l < n; ++l) {
+          if (l == i || l == j || l == k) continue;
+          const float s = glm::dot(nrm, p[l] - p[i]);
+          above += s > 1e-4f;
+          below += s < -1e-4f;
+        }
+        if (above && below) continue;
+        if (above) m.indices.insert(m.indices.end(), {i, k, j});
+        else m.indices.insert(m.indices.end(), {i, j, k});
+      }
+  return m;
+}
+
+TriMesh icosahedron() {
+  const float t = 1.6180340f;
+  std::vector<glm::vec3> p;
+  for (float a : {-1.0f, 1.0f})
+    for (float b : {-t, t}) {
+      p.push_back({0.0f, a, b});
+      p.push_back({a, b, 0.0f});
+      p.push_back({b, 0.0f, a});
+    }
+  return hull(p);
+}
+
+TriMesh tetrahedron() { return hull({{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}}); }
+
+TriMesh square() {
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  m.indices = {0, 1, 2, 0, 2, 3};
+  return m;
+}
+
+TriMesh triangle() {
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.indices = {0, 1, 2};
+  return m;
+}
+
+TriMesh append(TriMesh a, const TriMesh& b, const glm::vec3& shift) {
+  const auto off = static_cast<Index>(a.positions.size());
+  for (const glm::vec3& p : b.positions) a.positions.push_back(p + shift);
+  for (Index i : b.indices) a.indices.push_back(i + off);
+  return a;
+}
+
+// --- mesh checks ---------------------------------------------------------------------------------------
+
+std::uint64_t dkey(Index a, Index b) { return (std::uint64_t(a) << 32) | b; }
+
+// Each directed edge used once (interior edges shared by exactly two consistently oriented faces).
+// Returns the border edges (directed edges without reverse).
+std::set<std::uint64_t> expect_conforming(const TriMesh& m) {
+  std::set<std::uint64_t> directed;
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const bool fresh = directed.insert(dkey(m.corner(f, k), m.corner(f, (k + 1) % 3))).second;
+      EXPECT_TRUE(fresh) << "directed edge used twice, face " << f;
+    }
+  std::set<std::uint64_t> border;
+  for (std::uint64_t e : directed)
+    if (!directed.count((e << 32) | (e >> 32))) border.insert(e);
+  return border;
+}
+
+long euler(const TriMesh& m) {
+  std::set<Index> vs;
+  std::set<std::uint64_t> es;
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = m.corner(f, k), b = m.corner(f, (k + 1) % 3);
+      vs.insert(a);
+      es.insert(dkey(std::min(a, b), std::max(a, b)));
+    }
+  return long(vs.size()) - long(es.size()) + long(m.num_faces());
+}
+
+// The dual graph of a mesh, built independently of the library (map of directed edges).
+std::vector<std::vector<Index>> dual_graph(const TriMesh& m) {
+  std::map<std::uint64_t, Index> owner;
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) owner[dkey(m.corner(f, k), m.corner(f, (k + 1) % 3))] = static_cast<Index>(f);
+  std::vector<std::vector<Index>> adj(m.num_faces());
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto it = owner.find(dkey(m.corner(f, (k + 1) % 3), m.corner(f, k)));
+      if (it != owner.end()) adj[f].push_back(it->second);
+    }
+  return adj;
+}
+
+// Brute-force maximum matching size (memoised over vertex subsets; n <= 20).
+int brute_force_matching(const std::vector<std::vector<Index>>& adj) {
+  const std::size_t n = adj.size();
+  std::vector<int> memo(std::size_t(1) << n, -1);
+  std::function<int(std::uint32_t)> best = [&](std::uint32_t mask) -> int {
+    if (mask == 0) return 0;
+    if (memo[mask] >= 0) return memo[mask];
+    const int v = __builtin_ctz(mask);
+    const std::uint32_t rest = mask & ~(1u << v);
+    int b = best(rest);
+    for (Index w : adj[v])
+      if (w != Index(v) && (rest >> w & 1u)) b = std::max(b, 1 + best(rest & ~(1u << w)));
+    return memo[mask] = b;
+  };
+  return best(static_cast<std::uint32_t>((std::uint64_t(1) << n) - 1));
+}
+
+// Checks a matching: partners are mutual and adjacent; returns the number of pairs.
+std::size_t expect_valid_matching(const std::vector<std::vector<Index>>& adj, const std::vector<Index>& mate) {
+  std::size_t pairs = 0;
+  for (Index v = 0; v < adj.size(); ++v) {
+    if (mate[v] == kInvalid) continue;
+    EXPECT_EQ(mate[mate[v]], v);
+    EXPECT_NE(std::find(adj[v].begin(), adj[v].end(), mate[v]), adj[v].end()) << "partners not adjacent";
+    pairs += mate[v] > v;
+  }
+  return pairs;
+}
+
+// Tutte-Berge: for any set U, a matching has at most (n + |U| - odd(G - U)) / 2 pairs. Equality for the
+// returned set certifies maximality whatever algorithm produced it.
+void expect_tutte_berge_certificate(const std::vector<std::vector<Index>>& adj, const GraphMatching& gm) {
+  const std::size_t n = adj.size();
+  std::vector<std::uint8_t> in_u(n, 0);
+  for (Index u : gm.tutte_set) in_u[u] = 1;
+  std::vector<std::uint8_t> seen(n, 0);
+  std::size_t odd = 0;
+  for (Index s = 0; s < n; ++s) {
+    if (in_u[s] || seen[s]) continue;
+    std::size_t size = 0;
+    std::vector<Index> stack{s};
+    seen[s] = 1;
+    while (!stack.empty()) {
+      const Index v = stack.back();
+      stack.pop_back();
+      ++size;
+      for (Index w : adj[v])
+        if (!in_u[w] && !seen[w]) {
+          seen[w] = 1;
+          stack.push_back(w);
+        }
+    }
+    odd += size % 2;
+  }
+  EXPECT_EQ(gm.num_unmatched + gm.tutte_set.size(), odd) << "Tutte-Berge bound not met";
+}
+
+void to_csr(const std::vector<std::vector<Index>>& adj, std::vector<Index>& off, std::vector<Index>& nbr) {
+  off.assign(1, 0);
+  nbr.clear();
+  for (const auto& a : adj) {
+    nbr.insert(nbr.end(), a.begin(), a.end());
+    off.push_back(static_cast<Index>(nbr.size()));
+  }
+}
+
+// --- maximum_matching ----------------------------------------------------------------------------------
+
+TEST(MaximumMatching, MatchesBruteForceOnRandomGraphs) {
+  std::mt19937 rng(11);
+  std::size_t augmentations = 0, graphs = 0, moved = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const int n = 1 + int(rng() % 15);
+    const double p = 0.08 + 0.5 * double(rng() % 100) / 100.0;
+    std::vector<std::vector<Index>> adj(n);
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        if (std::uniform_real_distribution<double>(0, 1)(rng) < p) {
+          const int copies = rng() % 8 == 0 ? 2 : 1;  // parallel edges
+          for (int c = 0; c < copies; ++c) {
+            adj[i].push_back(Index(j));
+            adj[j].push_back(Index(i));
+          }
+        }
+    if (n > 1 && rng() % 6 == 0) {
+      const Index s = Index(rng() % n);
+      adj[s].push_back(s);  // self-loop, ignored
+      adj[s].push_back(s);
+    }
+    for (auto& a : adj) std::shuffle(a.begin(), a.end(), rng);
+    std::vector<Index> off, nbr;
+    to_csr(adj, off, nbr);
+    const int want = brute_force_matching(adj);
+    std::vector<std::uint8_t> flags(n, 0);
+    for (auto& f : flags) f = rng() % 3 == 0;
+    for (bool greedy : {true, false}) {
+      MatchingOptions mo;
+      mo.certificate = true;
+      mo.greedy_start = greedy;
+      if (trial % 2) mo.prefer_unmatched = flags;  // moving unmatched vertices keeps the size
+      const GraphMatching gm = maximum_matching(off, nbr, mo);
+      ASSERT_EQ(expect_valid_matching(adj, gm.mate), gm.num_pairs);
+      ASSERT_EQ(int(gm.num_pairs), want) << "trial " << trial << " n=" << n << " greedy=" << greedy;
+      EXPECT_EQ(gm.num_unmatched, std::size_t(n) - 2 * gm.num_pairs);
+      EXPECT_EQ(gm.greedy_pairs + gm.augmentations, gm.num_pairs);
+      expect_tutte_berge_certificate(adj, gm);
+      if (!greedy) augmentations += gm.augmentations;
+      moved += gm.moved;
+      ++graphs;
+    }
+  }
+  EXPECT_GT(augmentations, 1000u);
+  EXPECT_GT(moved, 50u);
+  EXPECT_EQ(graphs, 1200u);
+}
+
+// Graphs where a search must shrink (nested) blossoms to find the augmenting path.
+TEST(MaximumMatching, BlossomsAreShrunk) {
+  auto run = [](int n, const std::vector<std::pair<int, int>>& edges, const std::vector<std::pair<int, int>>& start,
+                int want) {
+    std::vector<std::vector<Index>> adj(n);
+    for (auto [a, b] : edges) {
+      adj[a].push_back(Index(b));
+      adj[b].push_back(Index(a));
+    }
+    ASSERT_EQ(brute_force_matching(adj), want);
+    std::vector<Index> off, nbr;
+    to_csr(adj, off, nbr);
+    MatchingOptions mo;
+    mo.greedy_start = false;
+    mo.certificate = true;
+    const GraphMatching gm = maximum_matching(off, nbr, mo);
+    EXPECT_EQ(int(gm.num_pairs), want);
+    expect_valid_matching(adj, gm.mate);
+    expect_tutte_berge_certificate(adj, gm);
+    (void)start;
+  };
+  // A 5-cycle 0..4 with a stem 5-0 and a tail 3-6: the augmenting path from 5 to 6 runs around the blossom.
+  run(7, {{0, 1}, {1, 2}, {2, 3}, {3, 4}, {4, 0}, {5, 0}, {3, 6}}, {}, 3);
+  // The Petersen graph: cubic and bridgeless, so perfectly matchable.
+  run(10, {{0, 1}, {1, 2}, {2, 3}, {3, 4}, {4, 0}, {0, 5}, {1, 6}, {2, 7}, {3, 8}, {4, 9},
+           {5, 7}, {7, 9}, {9, 6}, {6, 8}, {8, 5}},
+      {}, 5);
+  // Two triangles sharing a vertex with pendant vertices (a blossom inside a blossom).
+  run(9, {{0, 1}, {1, 2}, {2, 0}, {2, 3}, {3, 4}, {4, 2}, {0, 5}, {1, 6}, {3, 7}, {4, 8}}, {}, 4);
+  // A triangle: one vertex always left.
+  run(3, {{0, 1}, {1, 2}, {2, 0}}, {}, 1);
+}
+
+TEST(MaximumMatching, PreferredVerticesAreLeftUnmatched) {
+  // The path 0-1-2-3-4: two pairs, one vertex left; the preferred one is the one left when possible.
+  std::vector<std::vector<Index>> adj{{1}, {0, 2}, {1, 3}, {2, 4}, {3}};
+  std::vector<Index> off, nbr;
+  to_csr(adj, off, nbr);
+  for (Index preferred : {0u, 2u, 4u})
+    for (bool greedy : {true, false}) {
+      std::vector<std::uint8_t> flag(5, 0);
+      flag[preferred] = 1;
+      MatchingOptions mo;
+      mo.prefer_unmatched = flag;
+      mo.greedy_start = greedy;
+      const GraphMatching gm = maximum_matching(off, nbr, mo);
+      EXPECT_EQ(gm.num_pairs, 2u);
+      EXPECT_EQ(gm.mate[preferred], kInvalid) << "preferred " << preferred;
+    }
+  // Vertex 1 can never be the one left (odd position on the path): the request cannot be met.
+  std::vector<std::uint8_t> flag{0, 1, 0, 0, 0};
+  MatchingOptions mo;
+  mo.prefer_unmatched = flag;
+  const GraphMatching gm = maximum_matching(off, nbr, mo);
+  EXPECT_EQ(gm.num_pairs, 2u);
+  EXPECT_NE(gm.mate[1], kInvalid);
+}
+
+TEST(MaximumMatching, RejectsMalformedGraphs) {
+  const std::vector<Index> off{0, 1, 1}, nbr{1};  // 0 lists 1, 1 lists nobody
+  EXPECT_THROW(maximum_matching(off, nbr), InvalidInput);
+  const std::vector<Index> off2{0, 1, 2}, nbr2{5, 0};
+  EXPECT_THROW(maximum_matching(off2, nbr2), InvalidInput);
+  const std::vector<Index> off3{0, 2, 1}, nbr3{1, 0};
+  EXPECT_THROW(maximum_matching(off3, nbr3), InvalidInput);
+  const std::vector<Index> off4{1, 2}, nbr4{0};
+  EXPECT_THROW(maximum_matching(off4, nbr4), InvalidInput);
+  const std::vector<Index> off5{0, 1, 2}, nbr5{1, 0};
+  const std::vector<std::uint8_t> bad_flags{1};
+  MatchingOptions mo;
+  mo.prefer_unmatched = bad_flags;
+  EXPECT_THROW(maximum_matching(off5, nbr5, mo), InvalidInput);
+  EXPECT_EQ(maximum_matching(off5, nbr5).num_pairs, 1u);
+  const std::vector<Index> off6{0};
+  EXPECT_EQ(maximum_matching(off6, {}).num_pairs, 0u);  // the empty graph
+}
+
+// --- the pairing of mesh faces -------------------------------------------------------------------------
+
+// Checks what match_dual_faces promises: maximum (certificate and, when small, brute force), leftovers
+// on border faces, a compatible marking.
+void check_dual_matching(const TriMesh& m, const DualMatching& dm, bool brute) {
+  const auto adj = dual_graph(m);
+  ASSERT_EQ(dm.mate.size(), m.num_faces());
+  EXPECT_EQ(expect_valid_matching(adj, dm.mate), dm.num_pairs);
+  EXPECT_EQ(dm.num_leftovers, m.num_faces() - 2 * dm.num_pairs);
+  if (brute) {
+    EXPECT_EQ(int(dm.num_pairs), brute_force_matching(adj));
+  }
+  expect_tutte_berge_certificate(adj, dm.graph);
+  std::set<std::uint64_t> directed;
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) directed.insert(dkey(m.corner(f, k), m.corner(f, (k + 1) % 3)));
+  std::size_t border_faces = 0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const int k = dm.refinement_edge[f];
+    ASSERT_LT(k, 3);
+    const Index a = m.corner(f, k), b = m.corner(f, (k + 1) % 3);
+    bool has_border = false;
+    for (int j = 0; j < 3; ++j)
+      has_border |= !directed.count(dkey(m.corner(f, (j + 1) % 3), m.corner(f, j)));
+    border_faces += has_border;
+    const FaceId g = dm.mate[f];
+    if (g == kInvalid) {
+      EXPECT_TRUE(has_border) << "leftover face " << f << " is interior";
+      EXPECT_FALSE(directed.count(dkey(b, a))) << "leftover face " << f << " is not marked on a border edge";
+    } else {
+      const int kg = dm.refinement_edge[g];
+      EXPECT_EQ(m.corner(g, kg), b) << "pair " << f << ", " << g << " marks different edges";
+      EXPECT_EQ(m.corner(g, (kg + 1) % 3), a);
+    }
+  }
+  EXPECT_EQ(border_faces, dm.num_border_faces);
+}
+
+// Random face subsets of a triangulated grid: borders, several components, non-manifold vertices.
+TEST(DualMatching, RandomSmallMeshesAgainstBruteForce) {
+  std::mt19937 rng(5);
+  std::size_t leftovers = 0, moved = 0;
+  for (int trial = 0; trial < 250; ++trial) {
+    TriMesh grid;
+    const int w = 5, h = 4;
+    for (int y = 0; y <= h; ++y)
+      for (int x = 0; x <= w; ++x) grid.positions.push_back({float(x), float(y), 0.0f});
+    std::vector<std::array<Index, 3>> faces;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Index a = Index(y * (w + 1) + x), b = a + 1, c = a + Index(w) + 2, d = a + Index(w) + 1;
+        if (rng() % 2) {
+          faces.push_back({a, b, c});
+          faces.push_back({a, c, d});
+        } else {
+          faces.push_back({a, b, d});
+          faces.push_back({b, c, d});
+        }
+      }
+    std::shuffle(faces.begin(), faces.end(), rng);
+    const std::size_t keep = 6 + rng() % 13;
+    for (std::size_t i = 0; i < keep; ++i) grid.indices.insert(grid.indices.end(), faces[i].begin(), faces[i].end());
+    const DualMatching dm = match_dual_faces(grid, true);
+    check_dual_matching(grid, dm, true);
+    leftovers += dm.num_leftovers;
+    moved += dm.graph.moved;
+  }
+  EXPECT_GT(leftovers, 100u);
+  std::printf("[dual] random small meshes: %zu leftovers, %zu moved from interior faces to border faces\n", leftovers,
+              moved);
+}
+
+TEST(DualMatching, ClosedMeshesArePerfectlyMatched) {
+  // Petersen: the dual of a closed edge-manifold triangle mesh is cubic and bridgeless.
+  for (const TriMesh& m : {tetrahedron(), icosahedron(), torus(7, 5), torus(3, 3)}) {
+    const DualMatching dm = match_dual_faces(m, true);
+    check_dual_matching(m, dm, m.num_faces() <= 20);
+    EXPECT_EQ(dm.num_leftovers, 0u);
+    EXPECT_EQ(dm.num_border_faces, 0u);
+  }
+}
+
+TEST(DualMatching, InteriorLeftoversMoveToTheBorder) {
+  // A fan of 7 triangles ringed by 14: 21 faces, so one is left; it must end on the border ring.
+  const TriMesh m = disc(7, 2);
+  ASSERT_EQ(m.num_faces(), 21u);
+  const DualMatching dm = match_dual_faces(m, true);
+  check_dual_matching(m, dm, false);
+  EXPECT_EQ(dm.num_leftovers, 1u);
+  const DualMatching big = match_dual_faces(disc(9, 6), true);
+  check_dual_matching(disc(9, 6), big, false);
+  EXPECT_EQ(big.num_leftovers, 1u);
+}
+
+// --- the semi-regular hierarchy ------------------------------------------------------------------------
+
+float edge_length_error(const BisectionSplit& s) { return glm::length(s.positions[s.e1] - s.positions[s.e0]); }
+
+// The mesh with every node of level <= upto applied, with its Mt vertex ids.
+TriMesh mesh_at_level(const Mt& mt, const std::vector<std::uint16_t>& node_level, int upto,
+                      std::vector<VertexId>& vertex_ids) {
+  MtFront front(mt);
+  for (NodeId n = 1; n < mt.num_nodes(); ++n)
+    if (node_level[n] <= upto) front.apply(n);  // parents first: always legal
+  front.validate();
+  return front.to_mesh(nullptr, &vertex_ids);
+}
+
+// Valences of the new vertices at every level: interior 4 when created, 8 afterwards; border 3, then 5.
+void check_valences(const Mt& mt, const SemiRegularInfo& info, int levels) {
+  for (int upto = 1; upto <= levels; ++upto) {
+    std::vector<VertexId> ids;
+    const TriMesh m = mesh_at_level(mt, info.node_level, upto, ids);
+    const std::set<std::uint64_t> border = expect_conforming(m);
+    std::vector<std::uint8_t> on_border(m.num_vertices(), 0);
+    for (std::uint64_t e : border) on_border[e >> 32] = on_border[e & 0xffffffffu] = 1;
+    std::vector<std::set<Index>> nb(m.num_vertices());
+    for (std::size_t f = 0; f < m.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        nb[m.corner(f, k)].insert(m.corner(f, (k + 1) % 3));
+        nb[m.corner(f, (k + 1) % 3)].insert(m.corner(f, k));
+      }
+    std::size_t interior = 0, border_checked = 0;
+    for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+      const int lv = info.vertex_level[ids[v]];
+      if (lv == 0) continue;
+      const auto val = nb[v].size();
+      if (on_border[v]) {
+        EXPECT_EQ(val, lv == upto ? 3u : 5u) << "border vertex " << ids[v] << " of level " << lv << " at level " << upto;
+        ++border_checked;
+      } else {
+        EXPECT_EQ(val, lv == upto ? 4u : 8u) << "vertex " << ids[v] << " of level " << lv << " at level " << upto;
+        ++interior;
+      }
+    }
+    EXPECT_GT(interior + border_checked, 0u);
+  }
+}
+
+// Query fronts (object_error thresholds, with and without a focus sphere): conforming, same topology,
+// nothing exposed is wanted, and update() from the previous answer equals extract().
+void check_query_fronts(const Mt& mt, long base_euler, std::mt19937& rng) {
+  float lo = 1e30f, hi = 0.0f;
+  for (NodeId n = 1; n < mt.num_nodes(); ++n) {
+    lo = std::min(lo, mt.bound(n).error);
+    hi = std::max(hi, mt.bound(n).error);
+  }
+  MtFront moving(mt);
+  for (int q = 0; q < 12; ++q) {
+    Query query;
+    const float t = lo + (hi - lo) * std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
+    query.criterion = Criterion::object_error(t);
+    if (q % 3 == 2) {
+      const glm::vec3 c = mt.position(VertexId(rng() % mt.num_vertices()));
+      query.focus.spheres.push_back({c, mt.bound(0).radius * 0.3f});
+    }
+    MtFront front(mt);
+    extract(front, query);
+    front.validate();
+    const TriMesh m = front.to_mesh();
+    expect_conforming(m);
+    EXPECT_EQ(euler(m), base_euler);
+    for (FaceId f : front.faces()) {
+      const NodeId d = mt.destroyer(f);
+      if (d != kInvalid) {
+        EXPECT_FALSE(query.wants(mt.bound(d))) << "an exposed node is still wanted";
+      }
+    }
+    update(moving, query);
+    moving.validate();
+    for (NodeId n = 0; n < mt.num_nodes(); ++n) ASSERT_EQ(moving.is_applied(n), front.is_applied(n)) << "node " << n;
+  }
+}
+
+struct Case {
+  std::string name;
+  TriMesh mesh;
+  int levels;
+  bool closed;
+};
+
+std::vector<Case> generated_cases() {
+  return {
+      {"torus 8x6 (genus 1)", torus(8, 6), 4, true},
+      {"disc, 35 faces (odd: a leftover)", disc(7, 3), 4, false},
+      {"icosahedron", icosahedron(), 4, true},
+      {"tetrahedron", tetrahedron(), 5, true},
+      {"square (2 faces, border)", square(), 5, false},
+      {"two components: icosahedron + disc", append(icosahedron(), disc(5, 2), {5, 0, 0}), 3, false},
+      {"torus + 3-face fan + lone triangle", append(append(torus(4, 3), disc(3, 1), {9, 0, 0}), triangle(), {0, 9, 0}), 3,
+       false},
+  };
+}
+
+TEST(SemiRegular, GeneratedMeshesGiveConformingSemiRegularHierarchies) {
+  std::mt19937 rng(17);
+  for (const Case& c : generated_cases()) {
+    SCOPED_TRACE(c.name);
+    const TriMesh& base = c.mesh;
+    const std::size_t n = base.num_faces();
+    const long chi = euler(base);
+    SemiRegularInfo info;
+    const Mt mt = build_semiregular_mt(base, c.levels, {}, &info);
+    mt.validate();
+    // Matching and sizes.
+    check_dual_matching(base, info.matching, n <= 20);
+    if (c.closed) {
+      EXPECT_EQ(info.matching.num_leftovers, 0u);
+    }
+    ASSERT_EQ(info.faces_per_level.size(), std::size_t(c.levels) + 1);
+    for (int j = 0; j <= c.levels; ++j) EXPECT_EQ(info.faces_per_level[j], n << j) << "level " << j;
+    EXPECT_EQ(info.border_splits_per_level[1], info.matching.num_leftovers);
+    EXPECT_EQ(info.splits_per_level[1], info.matching.num_pairs + info.matching.num_leftovers);
+    const MtMetrics met = compute_metrics(mt);
+    EXPECT_EQ(met.coarsest_faces, n);
+    EXPECT_EQ(met.finest_faces, n << c.levels);
+    EXPECT_EQ(met.depth, std::size_t(c.levels));
+    EXPECT_EQ(met.nodes_per_level, info.splits_per_level);
+    EXPECT_EQ(compute_node_levels(mt), std::vector<Index>(info.node_level.begin(), info.node_level.end()));
+    for (NodeId v = 1; v < mt.num_nodes(); ++v) EXPECT_EQ(mt.kind(v), NodeKind::kSplit);
+
+    check_valences(mt, info, c.levels);
+
+    // Refine all: conforming, |K0| 2^levels faces, same surface and topology; coarsen all: the base.
+    MtFront front(mt);
+    for (NodeId v = 1; v < mt.num_nodes(); ++v) front.refine(v);
+    front.validate();
+    EXPECT_EQ(front.num_faces(), n << c.levels);
+    const TriMesh fine = front.to_mesh();
+    const auto border = expect_conforming(fine);
+    if (c.closed) {
+      EXPECT_TRUE(border.empty());
+    }
+    EXPECT_EQ(euler(fine), chi);
+    EXPECT_NEAR(surface_area(fine), surface_area(base), 1e-4 * surface_area(base));
+    for (NodeId v : mt.children(0)) front.coarsen(v);
+    front.validate();
+    std::vector<FaceId> faces(front.faces().begin(), front.faces().end());
+    std::sort(faces.begin(), faces.end());
+    std::vector<FaceId> base_faces(n);
+    for (FaceId f = 0; f < n; ++f) base_faces[f] = f;
+    EXPECT_EQ(faces, base_faces);
+    EXPECT_EQ(front.num_applied(), 1u);
+    for (FaceId f = 0; f < n; ++f)
+      EXPECT_EQ(canonical(mt.face(f)), canonical({base.corner(f, 0), base.corner(f, 1), base.corner(f, 2)}));
+
+    check_query_fronts(mt, chi, rng);
+
+    // The 4-k structure itself.
+    SemiRegularInfo info2;
+    const FourKMesh fk = build_semiregular_fourk(base, c.levels, {}, &info2);
+    fk.validate();
+    EXPECT_EQ(fk.num_current_faces(), n << c.levels);
+    EXPECT_EQ(info2.modification_level.size(), fk.num_modifications());
+  }
+}
+
+// The same marking through fourk/bisection.hpp gives the same Mt (same vertices, faces up to a cyclic
+// shift of corners, nodes, errors).
+TEST(SemiRegular, AgreesWithBuildBisectionMt) {
+  for (const Case& c : generated_cases()) {
+    SCOPED_TRACE(c.name);
+    SemiRegularOptions so;
+    so.node_error = edge_length_error;
+    SemiRegularInfo info;
+    const Mt a = build_semiregular_mt(c.mesh, c.levels, so, &info);
+    BisectionOptions bo;
+    bo.node_error = edge_length_error;
+    BisectionInfo binfo;
+    const Mt b = build_bisection_mt(c.mesh, info.matching.refinement_edge, c.levels, bo, &binfo);
+    ASSERT_EQ(a.num_vertices(), b.num_vertices());
+    ASSERT_EQ(a.num_faces(), b.num_faces());
+    ASSERT_EQ(a.num_nodes(), b.num_nodes());
+    EXPECT_EQ(a.positions(), b.positions());
+    for (FaceId f = 0; f < a.num_faces(); ++f) {
+      ASSERT_EQ(canonical(a.face(f)), canonical(b.face(f))) << "face " << f;
+      EXPECT_EQ(a.creator(f), b.creator(f));
+      EXPECT_EQ(a.destroyer(f), b.destroyer(f));
+    }
+    for (NodeId n = 0; n < a.num_nodes(); ++n) {
+      EXPECT_EQ(a.bound(n).error, b.bound(n).error);
+      EXPECT_EQ(info.node_level[n], binfo.node_level[n]);
+    }
+    EXPECT_EQ(info.vertex_level, binfo.vertex_level);
+  }
+}
+
+TEST(SemiRegular, CallbacksPlaceVerticesAndSetErrors) {
+  // Project new vertices onto the unit sphere: an icosphere-like refinement of the icosahedron.
+  TriMesh ico = icosahedron();
+  for (glm::vec3& p : ico.positions) p = glm::normalize(p);
+  SemiRegularOptions so;
+  so.place_vertex = [](const BisectionSplit& s) {
+    return glm::normalize(s.positions[s.e0] + s.positions[s.e1]);
+  };
+  so.node_error = [](const BisectionSplit& s) {
+    const glm::vec3 mid = (s.positions[s.e0] + s.positions[s.e1]) * 0.5f;
+    return glm::length(s.positions[s.mid] - mid);  // how far the chord is from the sphere
+  };
+  SemiRegularInfo info;
+  const Mt mt = build_semiregular_mt(ico, 4, so, &info);
+  mt.validate();
+  for (VertexId v = 0; v < mt.num_vertices(); ++v) EXPECT_NEAR(glm::length(mt.position(v)), 1.0f, 1e-5f);
+  for (NodeId n = 1; n < mt.num_nodes(); ++n) EXPECT_GT(mt.bound(n).error, 0.0f);
+  // Errors are nested (saturated) so object_error queries are monotone: coarser threshold, fewer faces.
+  std::size_t last = 0;
+  for (float t : {0.2f, 0.05f, 0.01f, 0.002f}) {
+    MtFront front(mt);
+    Query q;
+    q.criterion = Criterion::object_error(t);
+    extract(front, q);
+    front.validate();
+    EXPECT_GE(front.num_faces(), last);
+    last = front.num_faces();
+  }
+  EXPECT_EQ(last, ico.num_faces() << 4);
+}
+
+// Eq. 4 of Velho-Gomes (section 7.2) counts the fronts that apply whole levels below j and any subset of
+// level j: sum_j 2^(nodes of level j). It counts the fronts "all levels < j" twice (as j-1 full and j
+// empty) and misses the fronts that mix subsets of several levels, so the exact count is smaller at two
+// levels and larger from three on.
+TEST(SemiRegular, ExpressivePowerAgainstEq4) {
+  struct Small {
+    std::string name;
+    TriMesh mesh;
+    int levels;
+  };
+  const std::vector<Small> cases{{"tetrahedron", tetrahedron(), 5}, {"square", square(), 4}, {"disc(3,1)", disc(3, 1), 3}};
+  for (const Small& s : cases) {
+    for (int m = 1; m <= s.levels; ++m) {
+      SemiRegularInfo info;
+      const Mt mt = build_semiregular_mt(s.mesh, m, {}, &info);
+      BigUint eq4;
+      for (int j = 1; j <= m; ++j) eq4 += BigUint::pow2(info.splits_per_level[j]);
+      const LevelFrontCount lc = count_level_fronts(mt);
+      EXPECT_EQ(lc.total, eq4);
+      BigUint distinct = eq4;
+      distinct -= std::uint64_t(m - 1);
+      EXPECT_EQ(lc.distinct, distinct);
+      const FrontCount fc = expressive_power(mt);
+      ASSERT_TRUE(fc.exact) << s.name << " m=" << m;
+      if (mt.num_nodes() <= 21) {
+        EXPECT_EQ(fc.value, BigUint(testing::brute_force_fronts(mt))) << s.name << " m=" << m;
+      }
+      EXPECT_GE(fc.value, lc.distinct);
+      std::printf("[eq4] %-12s m=%d nodes/level=", s.name.c_str(), m);
+      for (int j = 1; j <= m; ++j) std::printf("%zu%s", info.splits_per_level[j], j < m ? "," : "");
+      std::printf("  eq4=%s distinct=%s exact=%s\n", eq4.to_string().c_str(), lc.distinct.to_string().c_str(),
+                  fc.value.to_string().c_str());
+      if (s.name == "tetrahedron") {
+        // The paper's case: level j has 2^j nodes.
+        for (int j = 1; j <= m; ++j) EXPECT_EQ(info.splits_per_level[j], std::size_t(1) << j);
+        const char* exact[] = {"1", "4", "19", "346", "116101", "13213613868"};
+        EXPECT_EQ(fc.value.to_string(), exact[m]);
+        if (m == 2) {
+          EXPECT_LT(fc.value, lc.total);  // 19 < 20: double counting
+        }
+        if (m >= 3) {
+          EXPECT_GT(fc.value, lc.total);  // mixed-level fronts
+        }
+      }
+    }
+  }
+}
+
+TEST(SemiRegular, ZeroLevelsIsTheBaseMesh) {
+  const Mt mt = build_semiregular_mt(icosahedron(), 0);
+  mt.validate();
+  EXPECT_EQ(mt.num_nodes(), 1u);
+  EXPECT_EQ(mt.num_faces(), 20u);
+}
+
+TEST(SemiRegular, BadInputThrowsNamingTheCulprit) {
+  auto expect_message = [](const std::function<void()>& fn, const std::string& needle, std::uint64_t element) {
+    try {
+      fn();
+      ADD_FAILURE() << "no exception; expected one mentioning '" << needle << "'";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      if (element != InvalidInput::kNoElement) {
+        EXPECT_EQ(e.element(), element) << e.what();
+      }
+    }
+  };
+  expect_message([] { build_semiregular_mt(TriMesh{}, 2); }, "empty", InvalidInput::kNoElement);
+  expect_message([] { build_semiregular_mt(square(), -1); }, "levels", InvalidInput::kNoElement);
+  // 2 faces * 2^30 = 2^31: one face too many. Checked before any allocation.
+  EXPECT_EQ(max_semiregular_levels(2), 29);
+  EXPECT_EQ(max_semiregular_levels(1000), 21);
+  EXPECT_EQ(max_semiregular_levels(std::size_t(1) << 31), -1);
+  expect_message([] { build_semiregular_mt(square(), 30); }, "levels", InvalidInput::kNoElement);
+  expect_message([] { build_semiregular_mt(torus(25, 20), 22); }, "2^31", InvalidInput::kNoElement);
+  expect_message([] { build_semiregular_mt(square(), 1000); }, "levels", InvalidInput::kNoElement);
+  TriMesh degenerate = icosahedron();
+  degenerate.indices[3 * 7 + 1] = degenerate.indices[3 * 7];
+  expect_message([&] { build_semiregular_mt(degenerate, 1); }, "face 7", 7);
+  TriMesh fin = square();  // a third face on the diagonal 0-2
+  fin.positions.push_back({0.5f, 0.5f, 1.0f});
+  fin.indices.insert(fin.indices.end(), {0, 2, 4});
+  expect_message([&] { build_semiregular_mt(fin, 1); }, "non-manifold", 2);
+  expect_message([&] { match_dual_faces(fin); }, "non-manifold", 2);
+  TriMesh nan = square();
+  nan.positions[3].y = NAN;
+  EXPECT_THROW(build_semiregular_mt(nan, 1), InvalidInput);
+  TriMesh out = square();
+  out.indices[2] = 17;
+  EXPECT_THROW(build_semiregular_mt(out, 1), InvalidInput);
+  SemiRegularOptions so;
+  so.place_vertex = [](const BisectionSplit&) { return glm::vec3(INFINITY, 0.0f, 0.0f); };
+  EXPECT_THROW(build_semiregular_mt(square(), 1, so), InvalidInput);
+  so = {};
+  so.node_error = [](const BisectionSplit&) { return -1.0f; };
+  EXPECT_THROW(build_semiregular_mt(square(), 1, so), InvalidInput);
+}
+
+// --- real meshes (../shared/data) ----------------------------------------------------------------------
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void check_real_mesh(const std::string& path, int levels, bool closed, bool all_levels) {
+  const TriMesh base = read_mesh(path);
+  const std::size_t n = base.num_faces();
+  auto t0 = std::chrono::steady_clock::now();
+  const DualMatching dm = match_dual_faces(base, true);
+  const double t_match = seconds_since(t0);
+  check_dual_matching(base, dm, false);
+  if (closed) {
+    EXPECT_EQ(dm.num_leftovers, 0u);
+  }
+  t0 = std::chrono::steady_clock::now();
+  SemiRegularInfo info;
+  const Mt mt = build_semiregular_mt(base, levels, {}, &info);
+  const double t_build = seconds_since(t0);
+  mt.validate();
+  EXPECT_EQ(info.matching.num_pairs, dm.num_pairs);
+  const MtMetrics met = compute_metrics(mt);
+  EXPECT_EQ(met.finest_faces, n << levels);
+  EXPECT_EQ(met.depth, std::size_t(levels));
+  if (all_levels) {
+    check_valences(mt, info, levels);
+  }
+  MtFront front(mt);
+  for (NodeId v = 1; v < mt.num_nodes(); ++v) front.apply(v);
+  front.validate();
+  const TriMesh fine = front.to_mesh();
+  EXPECT_EQ(euler(fine), euler(base));
+  for (NodeId v = static_cast<NodeId>(mt.num_nodes()); v-- > 1;) front.undo(v);
+  EXPECT_EQ(front.num_faces(), n);
+  std::printf("[semiregular] %s: %zu faces, %zu border faces; matching %zu pairs (greedy %zu, augmenting %zu), "
+              "%zu leftovers (moved to the border: %zu), %.3f s; depth %d: %zu faces, %zu nodes, build %.3f s, "
+              "Mt %.1f bytes/finest face\n",
+              path.substr(path.find_last_of('/') + 1).c_str(), n, dm.num_border_faces, dm.num_pairs,
+              dm.graph.greedy_pairs, dm.graph.augmentations, dm.num_leftovers, dm.graph.moved, t_match, levels,
+              met.finest_faces, met.nodes, t_build, met.bytes_per_face);
+}
+
+TEST(SemiRegularSharedData, Cow) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/cow_cgal_2904v.off");
+  check_real_mesh(path, 3, true, true);
+}
+
+TEST(SemiRegularSharedData, Bunny) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/bun_zipper_35947v.obj");
+  check_real_mesh(path, 2, false, false);
+}
+
+TEST(SemiRegularSharedData, Fandisk) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/fandisk_6475v.obj");
+  check_real_mesh(path, 2, true, true);
+}
+
+}  // namespace
+}  // namespace varmesh

@@ -1,0 +1,2 @@
+// placeholder: pm benchmarks being written
+int main() { return 0; }

@@ -1,0 +1,1 @@
+#include "pm/hierarchy_io.hpp"

@@ -1,0 +1,2 @@
+#include "pm/hierarchy_io.hpp"
+#include <gtest/gtest.h>
