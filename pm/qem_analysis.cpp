@@ -361,16 +361,13 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   } else {
     q_.assign(nl_, Quadric{});
   }
-  std::vector<std::pair<std::uint64_t, Index>> edges;
-  edges.reserve(3 * nf_);
-  for (std::size_t f = 0; f < nf_; ++f)
-    for (int k = 0; k < 3; ++k)
-      edges.push_back({(static_cast<std::uint64_t>(cur_[3 * f + k]) << 32) | cur_[3 * f + (k + 1) % 3], static_cast<Index>(3 * f + k)});
-  std::sort(edges.begin(), edges.end());
+  // Directed edge x -> y exists when a face of x holds it: scan x's faces (cache-friendly, O(degree)).
   auto has_edge = [&](Index x, Index y) {
-    const std::uint64_t key = (static_cast<std::uint64_t>(x) << 32) | y;
-    const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<std::uint64_t, Index>{key, 0});
-    return it != edges.end() && it->first == key;
+    for (Index f : vfaces_[x]) {
+      const int k = cur_[3 * f] == x ? 0 : (cur_[3 * f + 1] == x ? 1 : 2);
+      if (cur_[3 * f + (k + 1) % 3] == y) return true;
+    }
+    return false;
   };
   for (std::size_t f = 0; f < nf_; ++f) {
     const Index c0 = cur_[3 * f], c1 = cur_[3 * f + 1], c2 = cur_[3 * f + 2];

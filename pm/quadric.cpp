@@ -42,7 +42,10 @@ struct Optimum {
 // inverts A only when it is invertible; a relative threshold makes the test independent of model scale).
 template <int N>
 std::optional<Vec<N>> solve(const Dense<N>& q) {
-  const Eigen::SelfAdjointEigenSolver<Mat<N>> es(q.A);
+  // 3x3: the closed-form (trigonometric) eigensolver, about 10x faster than the iterative one; its
+  // precision (~1e-12 relative here) is far inside the kMinEigenRatio test.
+  Eigen::SelfAdjointEigenSolver<Mat<N>> es;
+  if constexpr (N == 3) es.computeDirect(q.A); else es.compute(q.A);
   if (es.info() != Eigen::Success) return std::nullopt;
   const Vec<N>& l = es.eigenvalues();  // ascending
   if (!(l(N - 1) > 0.0) || !(l(0) >= kMinEigenRatio * l(N - 1))) return std::nullopt;
