@@ -1,1 +1,979 @@
+// Four-face-cluster simplification exported as an increasing 4-k Multi-Triangulation.
+//
+// Papers: L. Velho, J. Gomes, "Variable resolution 4-k meshes" (2000): 8.2 (simplification-based
+// construction: collapse four-face clusters around degree-4 vertices, edge swaps where the connectivity is
+// irregular, interleaved levels, stored as an increasing structure), Figure 21 (the cow levels), 7.1/7.2
+// (the two node kinds: internal edge split 2 -> 4 and internal edge swap 2 -> 2), 3.1 (minimally compatible
+// modifications, non-redundancy). The closest point on a triangle follows the region classification of
+// C. Ericson, "Real-Time Collision Detection" (2005), 5.1.5.
+//
+// Why plans: removing a vertex v of degree d by d - 4 spoke swaps and one 4 -> 2 collapse retriangulates v's
+// star polygon, and every triangulation of a polygon can be peeled ear by ear down to a quadrilateral, so
+// trying every ear order reaches every triangulation. All steps of one vertex touch only its star (plus one
+// outer face for degree 3), which is what makes the clusters of a level independent.
 #include "fourk/simplify4k.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <queue>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "multitri/errors.hpp"
+
+namespace varmesh {
+
+namespace {
+
+using DVec = glm::dvec3;
+
+std::uint64_t dkey(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
+
+struct Triple {
+  VertexId a, b, c;  // sorted
+  bool operator==(const Triple&) const = default;
+};
+Triple triple(VertexId x, VertexId y, VertexId z) {
+  std::array<VertexId, 3> t{x, y, z};
+  std::sort(t.begin(), t.end());
+  return {t[0], t[1], t[2]};
+}
+struct TripleHash {
+  std::size_t operator()(const Triple& t) const noexcept {
+    std::uint64_t h = t.a * 0x9E3779B97F4A7C15ull;
+    h ^= (t.b + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2));
+    h ^= (t.c * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2));
+    return static_cast<std::size_t>(h ^ (h >> 29));
+  }
+};
+
+// Distance from p to the closed triangle abc (Ericson 5.1.5: Voronoi regions of vertices, edges, face).
+double point_triangle_distance(const DVec& p, const DVec& a, const DVec& b, const DVec& c) {
+  const DVec ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return glm::length(ap);
+  const DVec bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return glm::length(bp);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return glm::length(p - (a + ab * (d1 / (d1 - d3))));
+  const DVec cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return glm::length(cp);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return glm::length(p - (a + ac * (d2 / (d2 - d6))));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0)
+    return glm::length(p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))));
+  const double denom = va + vb + vc;
+  if (!(denom > 0.0)) {  // degenerate triangle: nearest of its three edges
+    auto seg = [&](const DVec& s, const DVec& t) {
+      const DVec st = t - s;
+      const double l2 = glm::dot(st, st);
+      const double u = l2 > 0.0 ? std::clamp(glm::dot(p - s, st) / l2, 0.0, 1.0) : 0.0;
+      return glm::length(p - (s + st * u));
+    };
+    return std::min({seg(a, b), seg(b, c), seg(c, a)});
+  }
+  return glm::length(p - (a + ab * (vb / denom) + ac * (vc / denom)));
+}
+
+// Unit normal (zero when degenerate) and radius-ratio quality 4*sqrt(3)*area / sum of squared edges.
+struct FaceShape {
+  DVec n{0.0};
+  double q = 0.0;
+};
+FaceShape face_shape(const DVec& a, const DVec& b, const DVec& c) {
+  const DVec cr = glm::cross(b - a, c - a);
+  const double len = glm::length(cr);  // twice the area
+  const DVec e0 = b - a, e1 = c - b, e2 = a - c;
+  const double s = glm::dot(e0, e0) + glm::dot(e1, e1) + glm::dot(e2, e2);
+  FaceShape f;
+  if (len > 0.0 && std::isfinite(len)) f.n = cr / len;
+  if (s > 0.0) f.q = 2.0 * std::sqrt(3.0) * len / s;
+  return f;
+}
+
+// A face of a plan: an existing face (id set) or one the plan would create.
+struct PFace {
+  std::array<VertexId, 3> v{};
+  double h = 0.0;
+  DVec n{0.0};
+  double q = 0.0;
+  FaceId id = kInvalid;
+};
+
+// One modification of a plan, in simplification order: kSwap 2 -> 2, kSplit 4 -> 2 (interior collapse) or
+// 2 -> 1 (border collapse). Faces are indices into the plan's pool.
+struct PStep {
+  NodeKind kind = NodeKind::kSwap;
+  std::uint8_t n_old = 0, n_new = 0;
+  std::array<Index, 4> old{};
+  std::array<Index, 2> created{};
+};
+
+struct Plan {
+  std::vector<PFace> pool;
+  std::vector<PStep> steps;
+  double cost = std::numeric_limits<double>::infinity();  // largest h of the faces left at the end
+  double quality = -1.0;                                    // worst quality of those faces
+  int swaps = 0;
+  bool valid() const noexcept { return !steps.empty(); }
+};
+
+// Smallest cosine between a face normal and the projection axis in projection mode (about 87 degrees).
+constexpr double kMinProjectedDot = 0.05;
+
+enum VertexState : std::uint8_t { kFree = 0, kLocked = 1, kGone = 2, kUnused = 3 };
+
+class Simplifier {
+ public:
+  Simplifier(const TriMesh& mesh, const Simplify4kOptions& options) : in_(mesh), opt_(options) {}
+  Simplify4kResult run();
+
+ private:
+  struct Star {
+    bool border = false;
+    std::vector<VertexId> ring;  // interior: face i = (v, ring[i], ring[i+1 mod d]); border: i < k = ring.size()-1
+    std::vector<FaceId> faces;
+  };
+  // The state of one plan search.
+  struct Search {
+    VertexId v = kInvalid;
+    bool closed = true;
+    std::vector<VertexId> ring;
+    std::vector<Index> ringf;  // pool indices, same convention as Star::faces
+    std::vector<Index> ears;   // pool indices of faces a swap left outside the shrinking star
+    std::vector<Index> anchors;  // pool indices of the existing faces the plan replaces
+    double qthr = 0.0;
+    // Projection mode (see try_step): the region projects one-to-one along `axis` onto the (e1, e2) plane.
+    bool proj = false;
+    DVec axis{0.0}, e1{0.0}, e2{0.0};
+    std::vector<std::pair<VertexId, DVec>> projected;  // region vertex -> (e1, e2, axis) coordinates
+    // What does not depend on the path to a face (many ear orders reach the same faces): its shape, whether
+    // its triple ever existed, which of its edges exist (bit k: edge k, bit k+3: edge k reversed was ever
+    // made), and in projection mode its bound.
+    struct Known {
+      std::array<VertexId, 3> v;
+      FaceShape shape;
+      bool seen;
+      std::uint8_t edges;
+      double h;  // < 0: not computed yet
+    };
+    std::vector<Known> known;
+    Plan cur, best;
+  };
+
+  void check_options() const;
+  void load_input();
+  bool collect_star(VertexId v, Star& s, std::size_t cap) const;
+  bool edge_exists(VertexId a, VertexId b) const { return he_.count(dkey(a, b)) || he_.count(dkey(b, a)); }
+  PFace existing(FaceId f) const;
+  Plan best_plan(VertexId v, std::uint16_t level);
+  bool setup_projection(Search& s, std::size_t star_faces) const;
+  double mapping_distance(const Search& s, const PFace& anchor, const PFace& f) const;
+  Search::Known& know(Search& s, const std::array<VertexId, 3>& t) const;
+  bool try_step(Search& s, NodeKind kind, std::span<const Index> old,
+                std::span<const std::array<VertexId, 3>> created);
+  void search_ring(Search& s);
+  void finish(Search& s);
+  bool better(const Plan& a, const Plan& b) const;
+  void execute(const Plan& plan, VertexId v, std::uint16_t level, Simplify4kLevel& stats);
+  void remove_face(FaceId f);
+  FaceId add_face(const std::array<VertexId, 3>& v, double h, std::uint16_t frozen);
+  TriMesh snapshot() const;
+  Simplify4kResult build_mt(std::vector<Simplify4kLevel> levels, std::vector<TriMesh> meshes);
+
+  const TriMesh& in_;
+  const Simplify4kOptions& opt_;
+  double tol_ = 0.0;  // cost comparison tolerance, relative to the model size
+
+  std::vector<DVec> pos_;
+  std::vector<VertexId> fv_;  // 3 per face, every face ever made
+  std::vector<std::uint8_t> alive_;
+  std::vector<double> h_;
+  std::vector<std::uint16_t> frozen_;
+  std::vector<std::uint16_t> blocked_;  // per vertex: the last level that froze one of its faces  // level whose collapse created the face (0: input or a swap)
+  std::vector<FaceId> vface_;        // an alive face at each vertex
+  std::vector<std::uint8_t> vstate_;
+  std::unordered_map<std::uint64_t, FaceId> he_;  // directed edge of an alive face -> face
+  std::unordered_set<Triple, TripleHash> triples_;  // every vertex triple ever made (non-redundancy)
+  std::unordered_set<std::uint64_t> directed_;      // every directed edge ever made (border edges)
+  std::size_t num_alive_ = 0;
+  std::size_t locked_ = 0;
+
+  // Modifications in simplification order: old faces (finer) -> new faces (coarser).
+  std::vector<NodeKind> op_kind_;
+  std::vector<std::uint16_t> op_level_;
+  std::vector<double> op_err_;
+  std::vector<Index> op_old_off_{0}, op_old_, op_new_off_{0}, op_new_;
+};
+
+void Simplifier::check_options() const {
+  auto bad = [](const std::string& why) { throw InvalidInput("simplify4k: option " + why); };
+  if (opt_.max_levels < 0 || opt_.max_levels > 65535) bad("max_levels must be in [0, 65535]");
+  if (opt_.max_swap_degree < 4 || opt_.max_swap_degree > 10) bad("max_swap_degree must be in [4, 10]");
+  if (opt_.max_border_faces < 2 || opt_.max_border_faces > 8) bad("max_border_faces must be in [2, 8]");
+  if (!(opt_.max_error >= 0.0)) bad("max_error must be >= 0");
+  if (!(opt_.min_normal_dot >= -1.0 && opt_.min_normal_dot <= 1.0)) bad("min_normal_dot must be in [-1, 1]");
+  if (!(opt_.min_dihedral_cos >= -1.0 && opt_.min_dihedral_cos <= 1.0)) bad("min_dihedral_cos must be in [-1, 1]");
+  if (!(opt_.min_quality >= 0.0 && opt_.min_quality <= 1.0)) bad("min_quality must be in [0, 1]");
+}
+
+void Simplifier::load_input() {
+  in_.validate();
+  const std::size_t nf = in_.num_faces(), nv = in_.num_vertices();
+  if (nf == 0) throw InvalidInput("simplify4k: empty mesh (no faces)");
+  if (nf >= (std::size_t(1) << 31) || nv >= (std::size_t(1) << 31))
+    throw InvalidInput("simplify4k: 2^31 or more faces or vertices");
+  pos_.resize(nv);
+  for (std::size_t i = 0; i < nv; ++i) pos_[i] = DVec(in_.positions[i]);
+  const Box3 box = in_.bounds();
+  tol_ = 1e-12 * std::max(1.0, static_cast<double>(box.diagonal()));
+  fv_.assign(in_.indices.begin(), in_.indices.end());
+  alive_.assign(nf, 1);
+  h_.assign(nf, 0.0);
+  frozen_.assign(nf, 0);
+  num_alive_ = nf;
+  he_.reserve(3 * nf * 2);
+  directed_.reserve(3 * nf * 2);
+  triples_.reserve(nf * 2);
+  vface_.assign(nv, kInvalid);
+  blocked_.assign(nv, 0);
+  std::vector<Index> incident(nv, 0);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const VertexId a = fv_[3 * f], b = fv_[3 * f + 1], c = fv_[3 * f + 2];
+    if (a == b || b == c || a == c)
+      throw InvalidInput("simplify4k: face " + std::to_string(f) + " is degenerate (repeated corner)", f);
+    for (int k = 0; k < 3; ++k) {
+      const VertexId p = fv_[3 * f + k], q = fv_[3 * f + (k + 1) % 3];
+      const auto [it, inserted] = he_.try_emplace(dkey(p, q), static_cast<FaceId>(f));
+      if (!inserted)
+        throw InvalidInput("simplify4k: face " + std::to_string(f) + " uses edge (" + std::to_string(p) + ", " +
+                               std::to_string(q) + ") in the same direction as face " + std::to_string(it->second) +
+                               " (non-manifold edge or inconsistent orientation)",
+                           f);
+      directed_.insert(dkey(p, q));
+      ++incident[p];
+      vface_[p] = static_cast<FaceId>(f);
+    }
+    if (!triples_.insert(triple(a, b, c)).second)
+      throw InvalidInput("simplify4k: face " + std::to_string(f) + " has the same three vertices as an earlier face", f);
+  }
+  // A vertex whose faces form several fans is non-manifold: classify it and lock it.
+  vstate_.assign(nv, kUnused);
+  Star s;
+  for (VertexId v = 0; v < nv; ++v) {
+    if (incident[v] == 0) continue;
+    vstate_[v] = kFree;
+    if (!collect_star(v, s, incident[v]) || s.faces.size() != incident[v]) {
+      vstate_[v] = kLocked;
+      ++locked_;
+    }
+  }
+}
+
+// The fan of faces around v in counter-clockwise order (see Star). False when it has more than `cap` faces.
+bool Simplifier::collect_star(VertexId v, Star& s, std::size_t cap) const {
+  s.ring.clear();
+  s.faces.clear();
+  s.border = false;
+  const FaceId f0 = vface_[v];
+  auto corner = [&](FaceId f) {
+    for (int k = 0; k < 3; ++k)
+      if (fv_[3 * f + k] == v) return k;
+    throw std::logic_error("simplify4k: vertex/face incidence broken");
+  };
+  // Forward: from face (v, a, b) to the face that holds v -> b.
+  FaceId f = f0;
+  while (true) {
+    const int k = corner(f);
+    s.faces.push_back(f);
+    s.ring.push_back(fv_[3 * f + (k + 1) % 3]);
+    if (s.faces.size() > cap) return false;
+    const VertexId b = fv_[3 * f + (k + 2) % 3];
+    const auto it = he_.find(dkey(v, b));
+    if (it == he_.end()) {
+      s.border = true;
+      s.ring.push_back(b);
+      break;
+    }
+    f = it->second;
+    if (f == f0) return true;
+  }
+  // Border: go backward from f0 (face (v, a, b) to the face that holds a -> v) and prepend.
+  std::vector<FaceId> back_faces;
+  std::vector<VertexId> back_ring;
+  f = f0;
+  while (true) {
+    const int k = corner(f);
+    const VertexId a = fv_[3 * f + (k + 1) % 3];
+    const auto it = he_.find(dkey(a, v));
+    if (it == he_.end()) break;
+    f = it->second;
+    const int kk = corner(f);
+    back_faces.push_back(f);
+    back_ring.push_back(fv_[3 * f + (kk + 1) % 3]);
+    if (s.faces.size() + back_faces.size() > cap) return false;
+  }
+  s.faces.insert(s.faces.begin(), back_faces.rbegin(), back_faces.rend());
+  s.ring.insert(s.ring.begin(), back_ring.rbegin(), back_ring.rend());
+  return true;
+}
+
+PFace Simplifier::existing(FaceId f) const {
+  PFace p;
+  p.v = {fv_[3 * f], fv_[3 * f + 1], fv_[3 * f + 2]};
+  const FaceShape sh = face_shape(pos_[p.v[0]], pos_[p.v[1]], pos_[p.v[2]]);
+  p.n = sh.n;
+  p.q = sh.q;
+  p.h = h_[f];
+  p.id = f;
+  return p;
+}
+
+bool Simplifier::better(const Plan& a, const Plan& b) const {
+  if (a.cost < b.cost - tol_) return true;
+  if (a.cost > b.cost + tol_) return false;
+  if (a.quality != b.quality) return a.quality > b.quality;
+  return a.swaps < b.swaps;
+}
+
+// Checks one step of the current plan and appends it (with its new faces) when legal. See the header for
+// the criteria; the error bound update is the one documented there.
+bool Simplifier::try_step(Search& s, NodeKind kind, std::span<const Index> old,
+                          std::span<const std::array<VertexId, 3>> created) {
+  Plan& p = s.cur;
+  auto undirected = [](VertexId a, VertexId b) { return a < b ? dkey(a, b) : dkey(b, a); };
+  std::array<std::uint64_t, 12> old_edges{};
+  std::size_t n_old_edges = 0;
+  for (Index o : old)
+    for (int k = 0; k < 3; ++k) old_edges[n_old_edges++] = undirected(p.pool[o].v[k], p.pool[o].v[(k + 1) % 3]);
+  auto is_old_edge = [&](std::uint64_t e) {
+    return std::find(old_edges.begin(), old_edges.begin() + static_cast<std::ptrdiff_t>(n_old_edges), e) !=
+           old_edges.begin() + static_cast<std::ptrdiff_t>(n_old_edges);
+  };
+  std::array<PFace, 2> nf;
+  std::array<Index, 2> known{};
+  for (std::size_t i = 0; i < created.size(); ++i) {
+    const auto& t = created[i];
+    const Search::Known& kn = know(s, t);
+    known[i] = static_cast<Index>(&kn - s.known.data());
+    if (kn.seen) return false;  // a face that existed once: the MT would be redundant
+    if (!(kn.shape.q >= s.qthr) || kn.shape.q <= 1e-9) return false;
+    nf[i].v = t;
+    nf[i].n = kn.shape.n;
+    nf[i].q = kn.shape.q;
+    for (int k = 0; k < 3; ++k) {
+      const VertexId a = t[k], b = t[(k + 1) % 3];
+      if (is_old_edge(undirected(a, b))) continue;
+      if (kn.edges >> k & 1u) return false;  // would make a non-manifold edge
+      bool shared = false;
+      for (std::size_t j = 0; j < created.size(); ++j)
+        for (int kk = 0; kk < 3; ++kk)
+          if (j != i && created[j][kk] == b && created[j][(kk + 1) % 3] == a) shared = true;
+      // A new edge no other new face shares is a border edge: MtBuilder requires that no face of the
+      // structure ever used it in the other direction.
+      if (!shared && (kn.edges >> (k + 3) & 1u)) return false;
+    }
+  }
+  // No fold-over: compare each new face with the old faces of the step it shares an edge with.
+  for (std::size_t i = 0; i < created.size(); ++i)
+    for (Index o : old) {
+      const PFace& t = p.pool[o];
+      bool shares = false;
+      for (int k = 0; k < 3 && !shares; ++k)
+        shares = is_old_edge(undirected(nf[i].v[k], nf[i].v[(k + 1) % 3])) &&
+                 (std::count(t.v.begin(), t.v.end(), nf[i].v[k]) != 0) &&
+                 (std::count(t.v.begin(), t.v.end(), nf[i].v[(k + 1) % 3]) != 0);
+      if (shares && glm::dot(t.n, t.n) > 0.0 && glm::dot(nf[i].n, t.n) < opt_.min_normal_dot) return false;
+    }
+  if (s.proj) {
+    // Projection mode: every stage of the plan triangulates the same projected polygon, so a point of an
+    // anchor face corresponds to the point of the new face with the same projection; their distance along
+    // the axis bounds how far the new face is from the anchor (header, "error bound"). No accumulation
+    // within the plan.
+    for (std::size_t i = 0; i < created.size(); ++i) {
+      if (glm::dot(nf[i].n, s.axis) < kMinProjectedDot) return false;
+      Search::Known& kn = s.known[known[i]];
+      if (kn.h < 0.0) {
+        kn.h = 0.0;
+        for (Index a : s.anchors) {
+          const double d = mapping_distance(s, p.pool[a], nf[i]);
+          if (d >= 0.0) kn.h = std::max(kn.h, p.pool[a].h + d);
+        }
+      }
+      nf[i].h = kn.h;
+    }
+  } else {
+    // Fallback: each old face goes to the new face its corners are nearest to; distance to a triangle is
+    // convex, so the corners bound the whole old face, and the triangle inequality accumulates.
+    for (Index o : old) {
+      const PFace& t = p.pool[o];
+      double best = std::numeric_limits<double>::infinity();
+      std::size_t at = 0;
+      for (std::size_t i = 0; i < created.size(); ++i) {
+        double d = 0.0;
+        for (VertexId c : t.v)
+          if (std::find(nf[i].v.begin(), nf[i].v.end(), c) == nf[i].v.end())
+            d = std::max(d, point_triangle_distance(pos_[c], pos_[nf[i].v[0]], pos_[nf[i].v[1]], pos_[nf[i].v[2]]));
+        if (d < best) {
+          best = d;
+          at = i;
+        }
+      }
+      nf[at].h = std::max(nf[at].h, t.h + best);
+    }
+  }
+  for (std::size_t i = 0; i < created.size(); ++i)
+    if (!(nf[i].h <= opt_.max_error)) return false;
+  PStep step;
+  step.kind = kind;
+  step.n_old = static_cast<std::uint8_t>(old.size());
+  step.n_new = static_cast<std::uint8_t>(created.size());
+  std::copy(old.begin(), old.end(), step.old.begin());
+  for (std::size_t i = 0; i < created.size(); ++i) {
+    step.created[i] = static_cast<Index>(p.pool.size());
+    p.pool.push_back(nf[i]);
+  }
+  p.steps.push_back(step);
+  return true;
+}
+
+Simplifier::Search::Known& Simplifier::know(Search& s, const std::array<VertexId, 3>& t) const {
+  for (auto& k : s.known)
+    if (k.v[0] == t[0] && k.v[1] == t[1] && k.v[2] == t[2]) return k;
+  Search::Known k{t, face_shape(pos_[t[0]], pos_[t[1]], pos_[t[2]]), triples_.count(triple(t[0], t[1], t[2])) != 0,
+                  0, -1.0};
+  for (int i = 0; i < 3; ++i) {
+    const VertexId a = t[i], b = t[(i + 1) % 3];
+    if (edge_exists(a, b)) k.edges = static_cast<std::uint8_t>(k.edges | (1u << i));
+    if (directed_.count(dkey(b, a))) k.edges = static_cast<std::uint8_t>(k.edges | (8u << i));
+  }
+  s.known.push_back(k);
+  return s.known.back();
+}
+
+// Peels ears off the star polygon (one spoke swap each) until the last step fits, trying every order.
+void Simplifier::search_ring(Search& s) {
+  const std::size_t d = s.ring.size();
+  const std::size_t final_size = s.closed ? 4 : 3;
+  if (d == final_size) {
+    finish(s);
+    return;
+  }
+  const VertexId v = s.v;
+  const std::size_t first = s.closed ? 0 : 1, last = s.closed ? d : d - 1;
+  // Legal ears first, then recurse from the cheapest (its bound prunes the others sooner).
+  struct Ear {
+    double h;
+    std::size_t i;
+  };
+  std::array<Ear, 16> ears{};
+  std::size_t n_ears = 0;
+  const std::size_t pool_mark = s.cur.pool.size(), step_mark = s.cur.steps.size();
+  for (std::size_t i = first; i < last && n_ears < ears.size(); ++i) {
+    const std::size_t pi = (i + d - 1) % d, ni = (i + 1) % d;
+    const std::array<Index, 2> old{s.ringf[pi], s.ringf[i]};
+    const std::array<std::array<VertexId, 3>, 2> created{{{v, s.ring[pi], s.ring[ni]}, {s.ring[pi], s.ring[i], s.ring[ni]}}};
+    if (try_step(s, NodeKind::kSwap, old, created)) ears[n_ears++] = {s.cur.pool.back().h, i};
+    s.cur.pool.resize(pool_mark);
+    s.cur.steps.resize(step_mark);
+  }
+  std::sort(ears.begin(), ears.begin() + static_cast<std::ptrdiff_t>(n_ears),
+            [](const Ear& a, const Ear& b) { return a.h < b.h || (a.h == b.h && a.i < b.i); });
+  for (std::size_t e = 0; e < n_ears; ++e) {
+    const std::size_t i = ears[e].i;
+    if (ears[e].h > s.best.cost + tol_) break;  // the ear stays: its bound is a lower bound of the cost
+    const std::size_t pi = (i + d - 1) % d, ni = (i + 1) % d;
+    const std::array<Index, 2> old{s.ringf[pi], s.ringf[i]};
+    const std::array<std::array<VertexId, 3>, 2> created{{{v, s.ring[pi], s.ring[ni]}, {s.ring[pi], s.ring[i], s.ring[ni]}}};
+    if (!try_step(s, NodeKind::kSwap, old, created)) continue;  // legal a moment ago; kept for safety
+    const Index f1 = s.cur.steps.back().created[0], f2 = s.cur.steps.back().created[1];
+    const auto ring = s.ring;
+    const auto ringf = s.ringf;
+    s.ringf[pi] = f1;
+    s.ring.erase(s.ring.begin() + static_cast<std::ptrdiff_t>(i));
+    s.ringf.erase(s.ringf.begin() + static_cast<std::ptrdiff_t>(i));
+    s.ears.push_back(f2);
+    ++s.cur.swaps;
+    search_ring(s);
+    --s.cur.swaps;
+    s.ears.pop_back();
+    s.ring = ring;
+    s.ringf = ringf;
+    s.cur.pool.resize(pool_mark);
+    s.cur.steps.resize(step_mark);
+  }
+}
+
+// The last step (4 -> 2 by either diagonal, or the border 2 -> 1), then the plan-wide dihedral checks.
+void Simplifier::finish(Search& s) {
+  auto evaluate = [&]() {
+    std::vector<Index> fin = s.ears;
+    const PStep& last = s.cur.steps.back();
+    for (int i = 0; i < last.n_new; ++i) fin.push_back(last.created[i]);
+    double cost = 0.0, quality = 1.0;
+    for (Index f : fin) {
+      cost = std::max(cost, s.cur.pool[f].h);
+      quality = std::min(quality, s.cur.pool[f].q);
+    }
+    Plan& c = s.cur;
+    c.cost = cost;
+    c.quality = quality;
+    if (s.best.valid() && !better(c, s.best)) return;
+    // Dihedral criterion across every edge of the final faces.
+    for (Index f : fin) {
+      const PFace& F = c.pool[f];
+      for (int k = 0; k < 3; ++k) {
+        const VertexId a = F.v[k], b = F.v[(k + 1) % 3];
+        bool inner = false;
+        for (Index g : fin) {
+          const PFace& G = c.pool[g];
+          for (int kk = 0; kk < 3; ++kk)
+            if (G.v[kk] == b && G.v[(kk + 1) % 3] == a) {
+              inner = true;
+              if (glm::dot(F.n, G.n) < opt_.min_dihedral_cos) return;
+            }
+        }
+        if (inner) continue;
+        const auto out = he_.find(dkey(b, a));
+        const auto own = he_.find(dkey(a, b));
+        if (out == he_.end() || own == he_.end()) continue;  // mesh border (or the new border edge)
+        const DVec no = face_shape(pos_[fv_[3 * out->second]], pos_[fv_[3 * out->second + 1]],
+                                   pos_[fv_[3 * out->second + 2]]).n;
+        const DVec nr = face_shape(pos_[fv_[3 * own->second]], pos_[fv_[3 * own->second + 1]],
+                                   pos_[fv_[3 * own->second + 2]]).n;
+        if (glm::dot(F.n, no) < std::min(opt_.min_dihedral_cos, glm::dot(nr, no))) return;
+      }
+    }
+    s.best = c;
+  };
+  const std::size_t pool_mark = s.cur.pool.size(), step_mark = s.cur.steps.size();
+  if (s.closed) {
+    const auto& r = s.ring;
+    const std::array<Index, 4> old{s.ringf[0], s.ringf[1], s.ringf[2], s.ringf[3]};
+    const std::array<std::array<std::array<VertexId, 3>, 2>, 2> diagonals{
+        {{{{r[0], r[1], r[2]}, {r[0], r[2], r[3]}}}, {{{r[1], r[2], r[3]}, {r[1], r[3], r[0]}}}}};
+    for (const auto& created : diagonals) {
+      if (try_step(s, NodeKind::kSplit, old, created)) evaluate();
+      s.cur.pool.resize(pool_mark);
+      s.cur.steps.resize(step_mark);
+    }
+  } else {
+    const std::array<Index, 2> old{s.ringf[0], s.ringf[1]};
+    const std::array<std::array<VertexId, 3>, 1> created{{{s.ring[0], s.ring[1], s.ring[2]}}};
+    if (try_step(s, NodeKind::kSplit, old, created)) evaluate();
+    s.cur.pool.resize(pool_mark);
+    s.cur.steps.resize(step_mark);
+  }
+}
+
+// Projection mode needs every anchor face to face the mean normal and, around an interior vertex, the
+// projected star to wind once (angles at v summing to 2 pi), so the region projects one-to-one.
+bool Simplifier::setup_projection(Search& s, std::size_t star_faces) const {
+  DVec axis(0.0);
+  for (Index a : s.anchors) {
+    const auto& v = s.cur.pool[a].v;
+    axis += glm::cross(pos_[v[1]] - pos_[v[0]], pos_[v[2]] - pos_[v[0]]);
+  }
+  const double len = glm::length(axis);
+  if (!(len > 0.0)) return false;
+  axis /= len;
+  for (Index a : s.anchors)
+    if (glm::dot(s.cur.pool[a].n, axis) < kMinProjectedDot) return false;
+  const DVec helper = std::abs(axis.x) < 0.6 ? DVec(1.0, 0.0, 0.0) : DVec(0.0, 1.0, 0.0);
+  s.axis = axis;
+  s.e1 = glm::normalize(glm::cross(axis, helper));
+  s.e2 = glm::cross(axis, s.e1);
+  s.projected.clear();
+  for (Index a : s.anchors)
+    for (VertexId w : s.cur.pool[a].v)
+      if (std::none_of(s.projected.begin(), s.projected.end(), [&](const auto& q) { return q.first == w; }))
+        s.projected.push_back({w, DVec(glm::dot(pos_[w], s.e1), glm::dot(pos_[w], s.e2), glm::dot(pos_[w], axis))});
+  double turn = 0.0;
+  for (std::size_t i = 0; i < star_faces; ++i) {
+    const auto& v = s.cur.pool[s.anchors[i]].v;
+    int k = 0;
+    while (v[k] != s.v) ++k;
+    const DVec a = pos_[v[(k + 1) % 3]] - pos_[s.v], b = pos_[v[(k + 2) % 3]] - pos_[s.v];
+    const double ax = glm::dot(a, s.e1), ay = glm::dot(a, s.e2), bx = glm::dot(b, s.e1), by = glm::dot(b, s.e2);
+    turn += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+  }
+  s.proj = std::abs(turn - 2.0 * std::numbers::pi) < 1e-3;
+  return s.proj;
+}
+
+// Largest distance along the axis between `anchor` and `f` over the overlap of their projections (the
+// vertices of the clipped polygon suffice: the difference of two linear height functions is affine there).
+// -1 when the projections do not overlap.
+double Simplifier::mapping_distance(const Search& s, const PFace& anchor, const PFace& f) const {
+  struct P2 {
+    double x, y;
+  };
+  auto coords = [&](VertexId v) -> const DVec& {
+    for (const auto& [w, c] : s.projected)
+      if (w == v) return c;
+    throw std::logic_error("simplify4k: vertex outside the projected region");
+  };
+  auto to2 = [&](VertexId v) {
+    const DVec& c = coords(v);
+    return P2{c.x, c.y};
+  };
+  auto cross = [](const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); };
+  const std::array<P2, 3> A{to2(anchor.v[0]), to2(anchor.v[1]), to2(anchor.v[2])};
+  const std::array<P2, 3> F{to2(f.v[0]), to2(f.v[1]), to2(f.v[2])};
+  // Separated (touching at most): the overlap has no area, and its points are also vertices of the
+  // overlaps with the neighbouring faces, so it adds nothing.
+  for (int e = 0; e < 3; ++e) {
+    if (cross(A[e], A[(e + 1) % 3], F[0]) <= 0.0 && cross(A[e], A[(e + 1) % 3], F[1]) <= 0.0 &&
+        cross(A[e], A[(e + 1) % 3], F[2]) <= 0.0)
+      return -1.0;
+    if (cross(F[e], F[(e + 1) % 3], A[0]) <= 0.0 && cross(F[e], F[(e + 1) % 3], A[1]) <= 0.0 &&
+        cross(F[e], F[(e + 1) % 3], A[2]) <= 0.0)
+      return -1.0;
+  }
+  std::array<P2, 9> poly{}, next{};
+  std::size_t n = 3;
+  std::copy(F.begin(), F.end(), poly.begin());
+  for (int e = 0; e < 3 && n > 0; ++e) {  // Sutherland-Hodgman against the anchor's edges
+    const P2& a = A[e];
+    const P2& b = A[(e + 1) % 3];
+    std::size_t m = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const P2& p = poly[i];
+      const P2& q = poly[(i + 1) % n];
+      const double sp = cross(a, b, p), sq = cross(a, b, q);
+      if (sp >= 0.0 && m < next.size()) next[m++] = p;
+      if (((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0)) && m < next.size()) {
+        const double t = sp / (sp - sq);
+        next[m++] = {p.x + t * (q.x - p.x), p.y + t * (q.y - p.y)};
+      }
+    }
+    poly = next;
+    n = m;
+  }
+  if (n == 0) return -1.0;
+  auto height = [&](const std::array<P2, 3>& T, const PFace& face, const P2& q) {
+    const double det = cross(T[0], T[1], T[2]);
+    const double l0 = cross(q, T[1], T[2]) / det, l1 = cross(T[0], q, T[2]) / det, l2 = 1.0 - l0 - l1;
+    return l0 * coords(face.v[0]).z + l1 * coords(face.v[1]).z + l2 * coords(face.v[2]).z;
+  };
+  double worst = 0.0;
+  for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, std::abs(height(A, anchor, poly[i]) - height(F, f, poly[i])));
+  return worst;
+}
+
+// The best legal way to remove v at this level, or an invalid plan. Plans in projection mode are preferred
+// (tighter bounds); the fallback bound is used where the region does not project one-to-one.
+Plan Simplifier::best_plan(VertexId v, std::uint16_t level) {
+  if (vstate_[v] != kFree) return {};
+  Star star;
+  const std::size_t cap = static_cast<std::size_t>(std::max(opt_.max_swap_degree, opt_.max_border_faces));
+  if (!collect_star(v, star, cap)) return {};
+  if (star.border) {
+    if (opt_.lock_border || star.faces.size() < 2 || star.faces.size() > std::size_t(opt_.max_border_faces))
+      return {};
+  } else if (star.faces.size() < 3 || star.faces.size() > std::size_t(opt_.max_swap_degree)) {
+    return {};
+  }
+  for (FaceId f : star.faces)
+    if (frozen_[f] == level) return {};  // a cluster collapsed at this level: its faces wait a level
+  Search base;
+  base.v = v;
+  base.closed = !star.border;
+  base.ring = star.ring;
+  double worst_q = 1.0;
+  for (FaceId f : star.faces) {
+    base.ringf.push_back(static_cast<Index>(base.cur.pool.size()));
+    base.anchors.push_back(static_cast<Index>(base.cur.pool.size()));
+    base.cur.pool.push_back(existing(f));
+    worst_q = std::min(worst_q, base.cur.pool.back().q);
+  }
+  base.qthr = std::min(opt_.min_quality, worst_q);
+  const std::size_t nstar = star.faces.size();
+  if (star.border) {  // the border moves: the projection correspondence does not hold, use the fallback
+    search_ring(base);
+    return std::move(base.best);
+  }
+  if (nstar > 3) {
+    Search s = base;
+    if (setup_projection(s, nstar)) {
+      search_ring(s);
+      if (s.best.valid()) return std::move(s.best);
+    }
+    s = base;
+    search_ring(s);
+    return std::move(s.best);
+  }
+  // Degree 3: swap one ring edge (a, b) outward with the face (b, a, x) beyond it; v gets degree 4.
+  Plan best;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const VertexId a = star.ring[i], b = star.ring[(i + 1) % 3], c = star.ring[(i + 2) % 3];
+    const auto it = he_.find(dkey(b, a));
+    if (it == he_.end() || frozen_[it->second] == level) continue;
+    const PFace outer = existing(it->second);
+    VertexId x = kInvalid;
+    for (VertexId w : outer.v)
+      if (w != a && w != b) x = w;
+    if (x == v || x == c) continue;
+    for (int mode = 0; mode < 2; ++mode) {
+      Search s = base;
+      const auto o = static_cast<Index>(s.cur.pool.size());
+      s.cur.pool.push_back(outer);
+      s.anchors.push_back(o);
+      s.qthr = std::min(s.qthr, outer.q);
+      if (mode == 0 && !setup_projection(s, nstar)) continue;
+      const std::array<Index, 2> old{s.ringf[i], o};
+      const std::array<std::array<VertexId, 3>, 2> created{{{v, a, x}, {v, x, b}}};
+      if (!try_step(s, NodeKind::kSwap, old, created)) continue;
+      const Index f1 = s.cur.steps.back().created[0], f2 = s.cur.steps.back().created[1];
+      s.ring = {a, x, b, c};
+      s.ringf = {f1, f2, s.ringf[(i + 1) % 3], s.ringf[(i + 2) % 3]};
+      s.cur.swaps = 1;
+      finish(s);
+      if (!s.best.valid()) continue;
+      if (!best.valid() || better(s.best, best)) best = std::move(s.best);
+      break;  // projection mode found a plan: no fallback for this edge
+    }
+  }
+  return best;
+}
+
+void Simplifier::remove_face(FaceId f) {
+  if (!alive_[f]) throw std::logic_error("simplify4k: removing a dead face");
+  alive_[f] = 0;
+  for (int k = 0; k < 3; ++k) he_.erase(dkey(fv_[3 * f + k], fv_[3 * f + (k + 1) % 3]));
+  --num_alive_;
+}
+
+FaceId Simplifier::add_face(const std::array<VertexId, 3>& v, double h, std::uint16_t frozen) {
+  const auto f = static_cast<FaceId>(alive_.size());
+  fv_.insert(fv_.end(), v.begin(), v.end());
+  alive_.push_back(1);
+  h_.push_back(h);
+  frozen_.push_back(frozen);
+  if (frozen != 0)
+    for (VertexId w : v) blocked_[w] = frozen;
+  for (int k = 0; k < 3; ++k) {
+    if (!he_.try_emplace(dkey(v[k], v[(k + 1) % 3]), f).second)
+      throw std::logic_error("simplify4k: a plan created a non-manifold edge");
+    directed_.insert(dkey(v[k], v[(k + 1) % 3]));
+    vface_[v[k]] = f;
+  }
+  triples_.insert(triple(v[0], v[1], v[2]));
+  ++num_alive_;
+  return f;
+}
+
+void Simplifier::execute(const Plan& plan, VertexId v, std::uint16_t level, Simplify4kLevel& stats) {
+  std::vector<FaceId> real(plan.pool.size(), kInvalid);
+  for (std::size_t i = 0; i < plan.pool.size(); ++i) real[i] = plan.pool[i].id;
+  for (const PStep& st : plan.steps) {
+    double err = 0.0;
+    for (int i = 0; i < st.n_old; ++i) {
+      const FaceId f = real[st.old[i]];
+      remove_face(f);
+      op_old_.push_back(f);
+    }
+    for (int i = 0; i < st.n_new; ++i) {
+      const PFace& pf = plan.pool[st.created[i]];
+      const FaceId f = add_face(pf.v, pf.h, st.kind == NodeKind::kSplit ? level : 0);
+      real[st.created[i]] = f;
+      op_new_.push_back(f);
+      err = std::max(err, pf.h);
+    }
+    op_old_off_.push_back(static_cast<Index>(op_old_.size()));
+    op_new_off_.push_back(static_cast<Index>(op_new_.size()));
+    op_kind_.push_back(st.kind);
+    op_level_.push_back(level);
+    op_err_.push_back(err);
+    if (st.kind == NodeKind::kSwap) ++stats.swaps;
+    else if (st.n_new == 1) ++stats.border_collapses;
+    else ++stats.collapses;
+  }
+  vstate_[v] = kGone;
+}
+
+TriMesh Simplifier::snapshot() const {
+  TriMesh m;
+  m.positions = in_.positions;
+  for (std::size_t f = 0; f < alive_.size(); ++f)
+    if (alive_[f]) m.indices.insert(m.indices.end(), fv_.begin() + 3 * static_cast<std::ptrdiff_t>(f),
+                                    fv_.begin() + 3 * static_cast<std::ptrdiff_t>(f) + 3);
+  return m;
+}
+
+Simplify4kResult Simplifier::build_mt(std::vector<Simplify4kLevel> levels, std::vector<TriMesh> meshes) {
+  MtBuilder b;
+  for (const auto& p : in_.positions) b.add_vertex(p);
+  for (std::size_t f = 0; f < alive_.size(); ++f) b.add_face(fv_[3 * f], fv_[3 * f + 1], fv_[3 * f + 2]);
+  std::vector<FaceId> base;
+  for (std::size_t f = 0; f < alive_.size(); ++f)
+    if (alive_[f]) base.push_back(static_cast<FaceId>(f));
+  b.set_base(base);
+  const std::size_t num_ops = op_kind_.size();
+  // Reverse order: the coarsest modification first; the MT removes what the simplification created.
+  for (std::size_t i = num_ops; i-- > 0;) {
+    const std::span<const FaceId> created(op_old_.data() + op_old_off_[i], op_old_off_[i + 1] - op_old_off_[i]);
+    const std::span<const FaceId> removed(op_new_.data() + op_new_off_[i], op_new_off_[i + 1] - op_new_off_[i]);
+    float err = static_cast<float>(op_err_[i]);
+    if (static_cast<double>(err) < op_err_[i]) err = std::nextafter(err, std::numeric_limits<float>::infinity());
+    b.add_node(op_kind_[i], removed, created, err);
+  }
+  std::vector<NodeId> node_new_to_old;
+  Simplify4kResult r;
+  r.mt = std::move(b).build(opt_.build, &node_new_to_old);
+  r.node_level.assign(r.mt.num_nodes(), 0);
+  for (NodeId n = 1; n < r.mt.num_nodes(); ++n) r.node_level[n] = op_level_[num_ops - node_new_to_old[n]];
+  for (NodeId n = 1; n < r.mt.num_nodes(); ++n) {
+    if (r.mt.kind(n) == NodeKind::kSplit) ++r.num_split_nodes;
+    if (r.mt.kind(n) == NodeKind::kSwap) ++r.num_swap_nodes;
+  }
+  r.levels = std::move(levels);
+  r.level_meshes = std::move(meshes);
+  r.locked_vertices = locked_;
+  return r;
+}
+
+Simplify4kResult Simplifier::run() {
+  check_options();
+  load_input();
+  auto used_vertices = [&]() {
+    std::vector<std::uint8_t> used(pos_.size(), 0);
+    for (std::size_t f = 0; f < alive_.size(); ++f)
+      if (alive_[f])
+        for (int k = 0; k < 3; ++k) used[fv_[3 * f + k]] = 1;
+    return static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
+  };
+  std::vector<Simplify4kLevel> levels(1);
+  levels[0].faces = num_alive_;
+  levels[0].vertices = used_vertices();
+  std::vector<TriMesh> meshes;
+  if (opt_.keep_level_meshes) meshes.push_back(snapshot());
+  // Greedy cover by increasing error bound. A plan is re-made when popped (the mesh may have changed)
+  // and pushed back if it got worse; the neighbours of a removed vertex are re-planned.
+  struct Candidate {
+    int blocks;
+    double cost;
+    int swaps;
+    VertexId v;
+    std::uint32_t stamp;
+  };
+  const bool cover = opt_.prefer_cover;
+  auto after = [cover](const Candidate& a, const Candidate& b) {
+    if (cover && a.blocks != b.blocks) return a.blocks > b.blocks;
+    if (a.cost != b.cost) return a.cost > b.cost;
+    if (a.swaps != b.swaps) return a.swaps > b.swaps;
+    return a.v > b.v;
+  };
+  std::vector<std::uint32_t> stamp(pos_.size(), 0);
+  std::vector<VertexId> touched;
+  for (int lv = 1; lv <= opt_.max_levels; ++lv) {
+    if (opt_.target_faces != 0 && num_alive_ <= opt_.target_faces) break;
+    const auto level = static_cast<std::uint16_t>(lv);
+    std::priority_queue<Candidate, std::vector<Candidate>, decltype(after)> queue(after);
+    auto blocks = [&](const Plan& p) {
+      int n = 0;
+      const PStep& last = p.steps.back();
+      std::array<VertexId, 6> seen{};
+      std::size_t ns = 0;
+      for (int i = 0; i < last.n_new; ++i)
+        for (VertexId w : p.pool[last.created[i]].v)
+          if (std::find(seen.begin(), seen.begin() + static_cast<std::ptrdiff_t>(ns), w) == seen.begin() + static_cast<std::ptrdiff_t>(ns)) {
+            seen[ns++] = w;
+            if (vstate_[w] == kFree && blocked_[w] != level) ++n;
+          }
+      return n;
+    };
+    auto push = [&](VertexId v) {
+      ++stamp[v];
+      const Plan p = best_plan(v, level);
+      if (p.valid()) queue.push({blocks(p), p.cost, p.swaps, v, stamp[v]});
+    };
+    for (VertexId v = 0; v < pos_.size(); ++v)
+      if (vstate_[v] == kFree) push(v);
+    Simplify4kLevel stats;
+    std::size_t done = 0;
+    while (!queue.empty()) {
+      if (opt_.target_faces != 0 && num_alive_ <= opt_.target_faces) break;
+      const Candidate c = queue.top();
+      queue.pop();
+      if (c.stamp != stamp[c.v]) continue;
+      const Plan p = best_plan(c.v, level);
+      if (!p.valid()) continue;
+      const int b = blocks(p);
+      if (p.cost > c.cost + tol_ || (cover && b > c.blocks)) {
+        queue.push({b, p.cost, p.swaps, c.v, ++stamp[c.v]});
+        continue;
+      }
+      touched.clear();
+      for (const PFace& f : p.pool)
+        if (f.id != kInvalid)
+          for (VertexId w : f.v)
+            if (w != c.v) touched.push_back(w);
+      execute(p, c.v, level, stats);
+      ++done;
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+      for (VertexId w : touched)
+        if (vstate_[w] == kFree) push(w);
+    }
+    if (done == 0) break;
+    stats.faces = num_alive_;
+    stats.vertices = used_vertices();
+    for (std::size_t f = 0; f < alive_.size(); ++f)
+      if (alive_[f]) stats.max_error = std::max(stats.max_error, h_[f]);
+    levels.push_back(stats);
+    if (opt_.keep_level_meshes) meshes.push_back(snapshot());
+  }
+  return build_mt(std::move(levels), std::move(meshes));
+}
+
+}  // namespace
+
+Simplify4kResult simplify4k(const TriMesh& mesh, const Simplify4kOptions& options) {
+  Simplifier s(mesh, options);
+  return s.run();
+}
+
+MtFront simplify4k_level_front(const Simplify4kResult& result, std::size_t level) {
+  if (level >= result.levels.size())
+    throw InvalidInput("simplify4k_level_front: level " + std::to_string(level) + " of " +
+                           std::to_string(result.levels.size()),
+                       level);
+  MtFront front(result.mt);
+  // Nodes are numbered parents first and a node's parents come from the same or coarser levels, so one
+  // pass in node order applies an order ideal.
+  for (NodeId n = 1; n < result.mt.num_nodes(); ++n)
+    if (result.node_level[n] > level) front.apply(n);
+  return front;
+}
+
+TriMesh simplify4k_level_mesh(const Simplify4kResult& result, std::size_t level, std::vector<VertexId>* vertex_ids) {
+  const MtFront front = simplify4k_level_front(result, level);
+  return front.to_mesh(nullptr, vertex_ids);
+}
+
+std::size_t simplify4k_closest_level(const Simplify4kResult& result, std::size_t faces) {
+  if (result.levels.empty()) throw InvalidInput("simplify4k_closest_level: the result has no level");
+  std::size_t best = 0;
+  auto gap = [&](std::size_t l) {
+    const std::size_t f = result.levels[l].faces;
+    return f > faces ? f - faces : faces - f;
+  };
+  for (std::size_t l = 1; l < result.levels.size(); ++l)
+    if (gap(l) < gap(best)) best = l;
+  return best;
+}
+
+}  // namespace varmesh

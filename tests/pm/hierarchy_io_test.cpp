@@ -1,2 +1,582 @@
+// Vertex hierarchy files (pm/hierarchy_io.hpp): write -> read gives the same hierarchy, accessor by accessor
+// and in behaviour (SrMesh), and every kind of damage (truncation at every byte, flipped bytes, absurd
+// counts, wrong magic or version, semantic nonsense behind a valid checksum) is an IoError naming the file.
 #include "pm/hierarchy_io.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <new>
+#include <string>
+
+#include <glm/common.hpp>
 #include <gtest/gtest.h>
+
+#include "multitri/errors.hpp"
+#include "multitri/file_util.hpp"
+#include "multitri/mesh_io.hpp"
+#include "pm/qem_analysis.hpp"
+#include "pm/sr_mesh.hpp"
+#include "pm_fixtures.hpp"
+#include "test_support.hpp"
+
+// Allocation guard: while armed, any single allocation above the limit fails with bad_alloc (and is
+// remembered), so "never allocate from an absurd count" is checked as a property instead of showing up as
+// an out-of-memory kill or a multi-gigabyte memset. Unarmed, these are plain malloc/free.
+namespace {
+std::atomic<bool> g_guard_armed{false};
+std::atomic<std::size_t> g_guard_peak{0};
+constexpr std::size_t kGuardLimit = std::size_t{1} << 20;
+
+void* guarded_alloc(std::size_t n) noexcept {
+  if (g_guard_armed.load(std::memory_order_relaxed)) {
+    std::size_t peak = g_guard_peak.load(std::memory_order_relaxed);
+    while (n > peak && !g_guard_peak.compare_exchange_weak(peak, n)) {
+    }
+    if (n > kGuardLimit) return nullptr;
+  }
+  return std::malloc(n == 0 ? 1 : n);
+}
+}  // namespace
+
+// GCC sees the std::free of a pointer that came from operator new once these are inlined into the standard
+// allocators; that pairing is exactly what a replacement does, so the diagnostic does not apply here.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+void* operator new(std::size_t n) {
+  if (void* p = guarded_alloc(n)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) {
+  if (void* p = guarded_alloc(n)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return guarded_alloc(n); }
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return guarded_alloc(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+
+namespace varmesh {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+using testing::make_grid;
+using testing::make_icosphere;
+using testing::make_torus;
+
+// Byte offsets of the documented layout (hierarchy_io.hpp), computed independently of the library.
+constexpr std::size_t kVersionAt = 8, kFlagsAt = 12, kSizeAt = 16, kLeavesAt = 24, kCollapsesAt = 32,
+                      kFacesAt = 40, kRingItemsAt = 48, kArraysAt = 56;
+struct Layout {
+  std::size_t positions, colors, records, faces, bounds, ring_offsets, ring_items, leaf_to_input, face_to_input,
+      locked, repair, checksum, size;
+};
+// Whether `locked` is stored is not visible through the public accessors (it may be all zeros), so it is
+// read from the flags of the file image.
+Layout layout_of(const VertexHierarchy& h, const std::vector<std::uint8_t>& image) {
+  const std::size_t n = h.num_nodes(), c = h.num_collapses(), f = h.num_faces(), l = h.num_leaves();
+  std::size_t ring_items = 0;
+  for (std::size_t v = l; v < n; ++v) ring_items += h.stored_ring(static_cast<Index>(v)).size();
+  const bool locked = (image.at(12) & 2u) != 0;
+  Layout a{};
+  a.positions = kArraysAt;
+  a.colors = a.positions + 12 * n;
+  a.records = a.colors + (h.has_colors() ? 12 * n : 0);
+  a.faces = a.records + 40 * c;
+  a.bounds = a.faces + 12 * f;
+  a.ring_offsets = a.bounds + 36 * n;
+  a.ring_items = a.ring_offsets + 4 * (c + 1);
+  a.leaf_to_input = a.ring_items + 4 * ring_items;
+  a.face_to_input = a.leaf_to_input + 4 * l;
+  a.locked = a.face_to_input + 4 * f;
+  a.repair = a.locked + (locked ? l : 0);
+  a.checksum = a.repair + 72;
+  a.size = a.checksum + 4;
+  return a;
+}
+
+std::uint64_t get_le(const Bytes& b, std::size_t at, int width) {
+  std::uint64_t v = 0;
+  for (int k = 0; k < width; ++k) v |= static_cast<std::uint64_t>(b[at + static_cast<std::size_t>(k)]) << (8 * k);
+  return v;
+}
+void put_le(Bytes& b, std::size_t at, std::uint64_t v, int width) {
+  for (int k = 0; k < width; ++k) b[at + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(v >> (8 * k));
+}
+
+// Bit-by-bit CRC-32 (reflected 0xEDB88320, init and final xor all ones): a second implementation, so the test
+// can re-seal a deliberately edited file and check the library's checksum against the documented one.
+std::uint32_t reference_crc32(const std::uint8_t* data, std::size_t n) {
+  std::uint32_t c = 0xFFFFFFFFu;
+  for (std::size_t i = 0; i < n; ++i) {
+    c ^= data[i];
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+  }
+  return ~c;
+}
+void reseal(Bytes& b) { put_le(b, b.size() - 4, reference_crc32(b.data(), b.size() - 4), 4); }
+
+VertexHierarchy decode(const Bytes& b, const std::string& name = "mem.vmh") {
+  return decode_vertex_hierarchy(std::span<const std::uint8_t>(b.data(), b.size()), name);
+}
+
+// Decodes under the allocation guard; returns the error (fails the test if there is none).
+IoError decode_error(const Bytes& b, std::size_t* peak = nullptr, const std::string& name = "mem.vmh") {
+  g_guard_peak = 0;
+  g_guard_armed = true;
+  struct Disarm {
+    ~Disarm() { g_guard_armed = false; }
+  } disarm;
+  try {
+    decode(b, name);
+  } catch (const IoError& e) {
+    g_guard_armed = false;
+    if (peak) *peak = g_guard_peak;
+    return e;
+  } catch (const std::bad_alloc&) {
+    g_guard_armed = false;
+    ADD_FAILURE() << "decode tried to allocate " << g_guard_peak.load() << " bytes in one block";
+    return IoError(name, "bad_alloc");
+  }
+  ADD_FAILURE() << "decode accepted a damaged file";
+  return IoError(name, "accepted");
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
+bool same_bits(const glm::vec3& a, const glm::vec3& b) {
+  return same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z);
+}
+
+// Every public accessor of the two hierarchies agrees (floats bit for bit).
+void expect_identical(const VertexHierarchy& a, const VertexHierarchy& b) {
+  ASSERT_EQ(a.num_leaves(), b.num_leaves());
+  ASSERT_EQ(a.num_nodes(), b.num_nodes());
+  ASSERT_EQ(a.num_collapses(), b.num_collapses());
+  ASSERT_EQ(a.num_faces(), b.num_faces());
+  ASSERT_EQ(a.has_colors(), b.has_colors());
+  EXPECT_EQ(a.node_bits(), b.node_bits());
+  EXPECT_EQ(a.max_depth(), b.max_depth());
+  EXPECT_EQ(a.memory_bytes(), b.memory_bytes());
+  for (Index v = 0; v < a.num_nodes(); ++v) {
+    EXPECT_TRUE(same_bits(a.position(v), b.position(v))) << "position " << v;
+    if (a.has_colors()) {
+      EXPECT_TRUE(same_bits(a.color(v), b.color(v))) << "colour " << v;
+    }
+    const ElementBound &ba = a.bound(v), &bb = b.bound(v);
+    EXPECT_TRUE(same_bits(ba.center, bb.center) && same_bits(ba.radius, bb.radius) && same_bits(ba.error, bb.error) &&
+                same_bits(ba.cone.axis, bb.cone.axis) && same_bits(ba.cone.cos_half_angle, bb.cone.cos_half_angle))
+        << "bound " << v;
+    EXPECT_EQ(a.parent(v), b.parent(v)) << v;
+    EXPECT_EQ(a.sibling(v), b.sibling(v)) << v;
+    EXPECT_EQ(a.key(v).value, b.key(v).value) << v;
+    EXPECT_EQ(a.depth(v), b.depth(v)) << v;
+    EXPECT_EQ(a.is_leaf(v), b.is_leaf(v)) << v;
+    if (a.is_leaf(v)) {
+      EXPECT_EQ(a.is_locked(v), b.is_locked(v)) << v;
+      continue;
+    }
+    const CollapseRecord &ra = a.record(v), &rb = b.record(v);
+    EXPECT_TRUE(ra.vt == rb.vt && ra.vu == rb.vu && ra.vl_hat == rb.vl_hat && ra.vr_hat == rb.vr_hat &&
+                ra.fl_hat == rb.fl_hat && ra.fr_hat == rb.fr_hat && ra.fn == rb.fn)
+        << "record of node " << v;
+    const auto sa = a.stored_ring(v), sb = b.stored_ring(v);
+    EXPECT_TRUE(std::equal(sa.begin(), sa.end(), sb.begin(), sb.end())) << "stored ring of node " << v;
+  }
+  auto same_span = [](std::span<const Index> x, std::span<const Index> y) { return std::equal(x.begin(), x.end(), y.begin(), y.end()); };
+  EXPECT_TRUE(same_span(a.face_corners(), b.face_corners()));
+  EXPECT_TRUE(same_span(a.roots(), b.roots()));
+  EXPECT_TRUE(same_span(a.base_faces(), b.base_faces()));
+  EXPECT_TRUE(same_span(a.leaf_to_input(), b.leaf_to_input()));
+  EXPECT_TRUE(same_span(a.face_to_input(), b.face_to_input()));
+  for (Index f = 0; f < a.num_faces(); ++f) EXPECT_EQ(a.face_creator(f), b.face_creator(f)) << f;
+  const InputRepairReport &pa = a.repair_report(), &pb = b.repair_report();
+  EXPECT_EQ(pa.input_vertices, pb.input_vertices);
+  EXPECT_EQ(pa.input_faces, pb.input_faces);
+  EXPECT_EQ(pa.unreferenced_vertices, pb.unreferenced_vertices);
+  EXPECT_EQ(pa.degenerate_faces, pb.degenerate_faces);
+  EXPECT_EQ(pa.duplicate_faces, pb.duplicate_faces);
+  EXPECT_EQ(pa.nonmanifold_edge_faces, pb.nonmanifold_edge_faces);
+  EXPECT_EQ(pa.nonmanifold_vertices, pb.nonmanifold_vertices);
+  EXPECT_EQ(pa.added_vertex_copies, pb.added_vertex_copies);
+  EXPECT_EQ(pa.locked_vertices, pb.locked_vertices);
+}
+
+std::vector<std::array<Index, 4>> faces_of(const SrMesh& sr) {
+  std::vector<std::array<Index, 4>> out;
+  sr.for_each_face([&](Index f, Index a, Index b, Index c) { out.push_back({f, a, b, c}); });
+  return out;
+}
+
+// SrMesh runs identically on both: the same faces after a partial refinement, refine_all and coarsen_all.
+void expect_same_behaviour(const VertexHierarchy& a, const VertexHierarchy& b) {
+  for (RefinementScheme s : {RefinementScheme::kKimLee, RefinementScheme::kHoppe97, RefinementScheme::kXiaVarshney}) {
+    SrMesh sa(a, s), sb(b, s);
+    EXPECT_EQ(faces_of(sa), faces_of(sb)) << scheme_name(s) << " base mesh";
+    // Split every other active non-leaf vertex, in id order.
+    std::vector<Index> act = sa.active_vertices();
+    std::sort(act.begin(), act.end());
+    for (std::size_t i = 0; i < act.size(); i += 2)
+      if (!a.is_leaf(act[i]) && sa.is_active(act[i])) {
+        EXPECT_EQ(sa.vsplit(act[i]), sb.vsplit(act[i]));
+      }
+    EXPECT_EQ(faces_of(sa), faces_of(sb)) << scheme_name(s) << " partial";
+    EXPECT_EQ(sa.refine_all(), sb.refine_all());
+    EXPECT_EQ(faces_of(sa), faces_of(sb)) << scheme_name(s) << " refine_all";
+    EXPECT_EQ(sa.num_faces(), a.num_faces()) << scheme_name(s);
+    EXPECT_EQ(sa.coarsen_all(), sb.coarsen_all());
+    EXPECT_EQ(faces_of(sa), faces_of(sb)) << scheme_name(s) << " coarsen_all";
+    sb.validate();
+  }
+}
+
+TriMesh colored(TriMesh m) {
+  const Box3 box = m.bounds();
+  const glm::vec3 ext = glm::max(box.extent(), glm::vec3(1e-6f));
+  for (const glm::vec3& p : m.positions) m.colors.push_back((p - box.lo) / ext);
+  return m;
+}
+
+// A grid with a fin: a third face on an interior edge makes that edge non-manifold (its copies get locked).
+TriMesh grid_with_fin(int n) {
+  TriMesh m = make_grid(n, n);
+  const Index a = static_cast<Index>((n / 2) * (n + 1) + 1), b = a + 1;
+  m.positions.push_back((m.positions[a] + m.positions[b]) * 0.5f + glm::vec3(0.0f, 0.1f, 0.4f));
+  m.indices.insert(m.indices.end(), {a, b, static_cast<Index>(m.positions.size() - 1)});
+  return m;
+}
+
+VertexHierarchy build_locked_colored(int n) {
+  QemOptions opt;
+  opt.use_colors = true;
+  opt.non_manifold = NonManifoldPolicy::kLock;
+  return build_vertex_hierarchy(colored(grid_with_fin(n)), opt);
+}
+
+bool any_locked(const VertexHierarchy& h) {
+  for (Index v = 0; v < h.num_leaves(); ++v)
+    if (h.is_locked(v)) return true;
+  return false;
+}
+
+void round_trip(const VertexHierarchy& h, const std::string& what) {
+  SCOPED_TRACE(what);
+  const Bytes bytes = encode_vertex_hierarchy(h);
+  EXPECT_EQ(bytes.size(), layout_of(h, bytes).size);
+  const VertexHierarchy back = decode(bytes);
+  back.validate();
+  expect_identical(h, back);
+  expect_same_behaviour(h, back);
+  EXPECT_EQ(encode_vertex_hierarchy(back), bytes) << "re-encoding a loaded hierarchy changed the bytes";
+}
+
+TEST(HierarchyIo, RoundTripGeneratedMeshes) {
+  round_trip(build_vertex_hierarchy(make_icosphere(3)), "icosphere");
+  round_trip(build_vertex_hierarchy(make_grid(12, 9)), "grid (border)");
+  round_trip(build_vertex_hierarchy(testing::concat(make_torus(16, 10), make_icosphere(1), {3, 0, 0})), "torus + sphere");
+  QemOptions partial;
+  partial.target_vertices = 60;
+  round_trip(build_vertex_hierarchy(make_torus(20, 12), partial), "torus, partial analysis");
+}
+
+TEST(HierarchyIo, RoundTripColours) {
+  QemOptions opt;
+  opt.use_colors = true;
+  const VertexHierarchy h = build_vertex_hierarchy(colored(make_icosphere(2)), opt);
+  ASSERT_TRUE(h.has_colors());
+  round_trip(h, "coloured icosphere");
+}
+
+TEST(HierarchyIo, RoundTripLockedNonManifold) {
+  QemOptions opt;
+  opt.non_manifold = NonManifoldPolicy::kLock;
+  const VertexHierarchy h = build_vertex_hierarchy(grid_with_fin(10), opt);
+  ASSERT_TRUE(any_locked(h));
+  ASSERT_GT(h.repair_report().locked_vertices, 0u);
+  ASSERT_GT(h.repair_report().nonmanifold_edge_faces, 0u);
+  round_trip(h, "locked fin");
+  round_trip(build_locked_colored(4), "small locked and coloured");
+}
+
+TEST(HierarchyIo, HeaderIsLittleEndianAsDocumented) {
+  const VertexHierarchy h = build_locked_colored(4);
+  const Bytes b = encode_vertex_hierarchy(h);
+  const Layout at = layout_of(h, b);
+  ASSERT_EQ(b.size(), at.size);
+  EXPECT_EQ(std::string(b.begin(), b.begin() + 8), "VMPMHIER");
+  EXPECT_EQ(get_le(b, kVersionAt, 4), kVertexHierarchyFormatVersion);
+  EXPECT_EQ(b[kVersionAt], 1u);
+  EXPECT_EQ(get_le(b, kFlagsAt, 4), 3u);  // colours and locked
+  EXPECT_EQ(get_le(b, kSizeAt, 8), b.size());
+  EXPECT_EQ(get_le(b, kLeavesAt, 8), h.num_leaves());
+  EXPECT_EQ(get_le(b, kCollapsesAt, 8), h.num_collapses());
+  EXPECT_EQ(get_le(b, kFacesAt, 8), h.num_faces());
+  EXPECT_EQ(get_le(b, kRingItemsAt, 8), (at.leaf_to_input - at.ring_items) / 4);
+  EXPECT_EQ(static_cast<std::uint32_t>(get_le(b, at.positions + 4, 4)), std::bit_cast<std::uint32_t>(h.position(0).y));
+  EXPECT_EQ(static_cast<std::uint32_t>(get_le(b, at.colors + 8, 4)), std::bit_cast<std::uint32_t>(h.color(0).z));
+  const Index vs = static_cast<Index>(h.num_leaves());
+  EXPECT_EQ(get_le(b, at.records + 4, 4), h.record(vs).vu);
+  EXPECT_EQ(get_le(b, at.faces + 4, 4), h.face(0)[1]);
+  EXPECT_EQ(static_cast<std::uint32_t>(get_le(b, at.bounds + 16, 4)), std::bit_cast<std::uint32_t>(h.bound(0).error));
+  EXPECT_EQ(get_le(b, at.face_to_input, 4), h.face_to_input()[0]);
+  EXPECT_EQ(get_le(b, at.repair + 8, 8), h.repair_report().input_faces);
+  EXPECT_EQ(get_le(b, at.checksum, 4), reference_crc32(b.data(), b.size() - 4));
+  const char* check = "123456789";
+  EXPECT_EQ(reference_crc32(reinterpret_cast<const std::uint8_t*>(check), 9), 0xCBF43926u);
+}
+
+TEST(HierarchyIo, FilesRoundTripAndWritesAreAtomic) {
+  const auto dir = testing::scratch_dir("hierarchy_io");
+  const VertexHierarchy h = build_locked_colored(6);
+  const std::string path = (dir / "h.vmh").string();
+  write_vertex_hierarchy(path, h);
+  const std::string on_disk = read_file(path);
+  const Bytes expected = encode_vertex_hierarchy(h);
+  EXPECT_EQ(on_disk, std::string(expected.begin(), expected.end()));
+  expect_identical(h, read_vertex_hierarchy(path));
+
+  // Overwriting replaces the file; no temporary is left beside it.
+  const VertexHierarchy other = build_vertex_hierarchy(make_icosphere(1));
+  write_vertex_hierarchy(path, other);
+  expect_identical(other, read_vertex_hierarchy(path));
+  std::size_t entries = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) entries += e.is_regular_file();
+  EXPECT_EQ(entries, 1u);
+
+  // A write that cannot happen throws and creates nothing.
+  const std::string bad = (dir / "missing_folder" / "h.vmh").string();
+  EXPECT_THROW(write_vertex_hierarchy(bad, h), IoError);
+  EXPECT_FALSE(std::filesystem::exists(bad));
+  EXPECT_THROW(write_vertex_hierarchy((dir / "empty.vmh").string(), VertexHierarchy{}), InvalidInput);
+  EXPECT_FALSE(std::filesystem::exists(dir / "empty.vmh"));
+
+  try {
+    read_vertex_hierarchy((dir / "nope.vmh").string());
+    ADD_FAILURE() << "read a missing file";
+  } catch (const IoError& e) {
+    EXPECT_TRUE(contains(e.what(), "nope.vmh")) << e.what();
+  }
+
+  // A truncated file on disk: the error names the path and the offset where the data ran out.
+  const std::string cut = (dir / "cut.vmh").string();
+  {
+    std::ofstream out(cut, std::ios::binary);
+    out.write(on_disk.data(), static_cast<std::streamsize>(on_disk.size() / 2));
+  }
+  try {
+    read_vertex_hierarchy(cut);
+    ADD_FAILURE() << "read a truncated file";
+  } catch (const IoError& e) {
+    EXPECT_EQ(e.file(), cut);
+    EXPECT_EQ(e.byte_offset(), on_disk.size() / 2);
+    EXPECT_TRUE(contains(e.reason(), "truncated")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "cut.vmh")) << e.what();
+  }
+}
+
+TEST(HierarchyIo, EveryTruncationIsRejected) {
+  const Bytes full = encode_vertex_hierarchy(build_locked_colored(4));
+  ASSERT_LT(full.size(), 12000u);  // keeps the exhaustive loops fast under the sanitizers
+  for (std::size_t len = 0; len < full.size(); ++len) {
+    const Bytes part(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(len));
+    std::size_t peak = 0;
+    const IoError e = decode_error(part, &peak, "cut.vmh");
+    EXPECT_EQ(e.file(), "cut.vmh");
+    EXPECT_EQ(e.byte_offset(), len) << e.what();
+    EXPECT_TRUE(contains(e.reason(), "truncated")) << len << ": " << e.what();
+    EXPECT_LE(peak, 4096u) << len;
+    if (!contains(e.reason(), "truncated")) break;
+  }
+}
+
+void expect_every_flip_rejected(const Bytes& full, std::size_t stride, std::uint8_t mask) {
+  Bytes b = full;
+  for (std::size_t i = 0; i < b.size(); i += stride) {
+    b[i] ^= mask;
+    const IoError e = decode_error(b, nullptr, "flip.vmh");
+    b[i] ^= mask;
+    if (e.file() != "flip.vmh" || !contains(e.what(), "flip.vmh") || e.reason() == "accepted" || e.reason() == "bad_alloc") {
+      ADD_FAILURE() << "byte " << i << " mask " << int{mask} << ": " << e.what();
+      break;
+    }
+  }
+}
+
+TEST(HierarchyIo, EveryFlippedByteIsRejected) {
+  const Bytes small = encode_vertex_hierarchy(build_locked_colored(4));
+  expect_every_flip_rejected(small, 1, 0x01);
+  expect_every_flip_rejected(small, 1, 0x80);
+  expect_every_flip_rejected(small, 1, 0xFF);
+  const Bytes large = encode_vertex_hierarchy(build_vertex_hierarchy(make_icosphere(3)));
+  expect_every_flip_rejected(large, large.size() / 397 + 1, 0x10);
+}
+
+TEST(HierarchyIo, TrailingBytesAreRejected) {
+  Bytes b = encode_vertex_hierarchy(build_vertex_hierarchy(make_icosphere(1)));
+  const std::size_t size = b.size();
+  b.push_back(0);
+  const IoError e = decode_error(b);
+  EXPECT_EQ(e.byte_offset(), size);
+  EXPECT_TRUE(contains(e.reason(), "unexpected bytes")) << e.what();
+}
+
+TEST(HierarchyIo, HugeCountsThrowWithoutAllocating) {
+  const Bytes good = encode_vertex_hierarchy(build_locked_colored(4));
+  for (std::size_t field : {kLeavesAt, kCollapsesAt, kFacesAt, kRingItemsAt}) {
+    for (std::uint64_t value : {std::uint64_t{0xFFFFFFFE}, std::uint64_t{1} << 31, std::uint64_t{1} << 40,
+                                ~std::uint64_t{0}, std::uint64_t{200000}}) {
+      Bytes b = good;
+      put_le(b, field, value, 8);
+      reseal(b);
+      std::size_t peak = 0;
+      const IoError e = decode_error(b, &peak, "huge.vmh");
+      EXPECT_EQ(e.byte_offset(), field) << e.what();
+      EXPECT_TRUE(contains(e.reason(), "count of")) << e.what();
+      EXPECT_TRUE(contains(e.what(), "huge.vmh"));
+      EXPECT_LE(peak, 4096u) << "allocated " << peak << " bytes for count " << value << " at " << field;
+    }
+  }
+  // Counts that each fit but together disagree with the file size.
+  Bytes b = good;
+  put_le(b, kRingItemsAt, get_le(b, kRingItemsAt, 8) + 1, 8);
+  const IoError e = decode_error(b);
+  EXPECT_TRUE(contains(e.reason(), "counts describe")) << e.what();
+}
+
+TEST(HierarchyIo, WrongMagicVersionAndFlagsHaveTheirOwnMessages) {
+  const Bytes good = encode_vertex_hierarchy(build_vertex_hierarchy(make_icosphere(1)));
+  {
+    Bytes b = good;
+    b[0] = 'X';
+    const IoError e = decode_error(b, nullptr, "some/where/magic.vmh");
+    EXPECT_EQ(e.byte_offset(), 0u);
+    EXPECT_TRUE(contains(e.reason(), "bad magic")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "some/where/magic.vmh")) << e.what();
+  }
+  {
+    const std::string off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    const IoError e = decode_error(Bytes(off.begin(), off.end()), nullptr, "mesh.off");
+    EXPECT_TRUE(contains(e.reason(), "bad magic")) << e.what();
+  }
+  for (std::uint32_t version : {2u, 0u, 0x01000000u}) {
+    Bytes b = good;
+    put_le(b, kVersionAt, version, 4);
+    const IoError e = decode_error(b, nullptr, "future.vmh");
+    EXPECT_EQ(e.byte_offset(), kVersionAt);
+    EXPECT_TRUE(contains(e.reason(), "unsupported format version " + std::to_string(version))) << e.what();
+    EXPECT_TRUE(contains(e.what(), "future.vmh")) << e.what();
+  }
+  {
+    Bytes b = good;
+    put_le(b, kFlagsAt, 4, 4);
+    reseal(b);
+    const IoError e = decode_error(b);
+    EXPECT_EQ(e.byte_offset(), kFlagsAt);
+    EXPECT_TRUE(contains(e.reason(), "unknown flags")) << e.what();
+  }
+}
+
+TEST(HierarchyIo, ChecksumMismatchNamesTheChecksum) {
+  const VertexHierarchy h = build_vertex_hierarchy(make_icosphere(1));
+  Bytes b = encode_vertex_hierarchy(h);
+  const Layout at = layout_of(h, b);
+  b[at.bounds + 5] ^= 0x04;
+  const IoError e = decode_error(b, nullptr, "sum.vmh");
+  EXPECT_EQ(e.byte_offset(), at.checksum);
+  EXPECT_TRUE(contains(e.reason(), "checksum mismatch")) << e.what();
+  EXPECT_TRUE(contains(e.what(), "sum.vmh"));
+}
+
+// Damage behind a valid checksum (a buggy writer, or a deliberate edit): the parser and the builder catch it.
+TEST(HierarchyIo, SemanticErrorsBehindAValidChecksum) {
+  const VertexHierarchy h = build_locked_colored(4);
+  const Bytes good = encode_vertex_hierarchy(h);
+  const Layout at = layout_of(h, good);
+  auto edited = [&](std::size_t offset, std::uint64_t value, int width) {
+    Bytes b = good;
+    put_le(b, offset, value, width);
+    reseal(b);
+    return decode_error(b, nullptr, "edit.vmh");
+  };
+  const std::uint32_t nan_bits = std::bit_cast<std::uint32_t>(std::numeric_limits<float>::quiet_NaN());
+  const std::uint32_t inf_bits = std::bit_cast<std::uint32_t>(std::numeric_limits<float>::infinity());
+  struct Case {
+    std::size_t offset;
+    std::uint64_t value;
+    int width;
+    const char* reason;
+  };
+  const Case cases[] = {
+      {at.positions + 12 * 3 + 4, nan_bits, 4, "non-finite value in the position of node"},
+      {at.colors + 8, inf_bits, 4, "non-finite value in the colour of node"},
+      {at.bounds + 36 * 2 + 12, inf_bits, 4, "non-finite value in the bound radius"},
+      {at.bounds + 36 * 5 + 32, nan_bits, 4, "non-finite value in the normal cone angle"},
+      {at.locked + 1, 2, 1, "locked flag of leaf 1"},
+      {at.ring_offsets + 4, 0xFFFFFFFFu, 4, "stored ring offset 1"},
+      {at.ring_offsets, 1, 4, "stored ring offset 0"},
+  };
+  for (const Case& c : cases) {
+    const IoError e = edited(c.offset, c.value, c.width);
+    EXPECT_EQ(e.byte_offset(), c.offset) << e.what();
+    EXPECT_TRUE(contains(e.reason(), c.reason)) << e.what();
+    EXPECT_EQ(e.file(), "edit.vmh");
+  }
+  // Errors of VertexHierarchyBuilder::finish (InvalidInput) and of validate() (std::logic_error) become
+  // IoError naming the file.
+  const Index nn = static_cast<Index>(h.num_nodes());
+  Index child = 0;
+  while (h.parent(child) == kInvalid) ++child;
+  const struct {
+    std::size_t offset;
+    std::uint64_t value;
+    const char* reason;
+  } builder_cases[] = {
+      {at.records, nn, "is not an earlier node"},                           // vt of the first collapse
+      {at.records + 40 + 4, h.record(static_cast<Index>(h.num_leaves())).vt, "already has parent"},
+      {at.faces, h.num_leaves(), "corner is not a leaf"},
+      {at.ring_items, nn + 5, "stored ring item"},
+      {at.bounds + 36 * child + 16, std::bit_cast<std::uint32_t>(1e30f), "larger error"},  // above its parent's
+  };
+  for (const auto& c : builder_cases) {
+    const IoError e = edited(c.offset, c.value, 4);
+    EXPECT_TRUE(contains(e.reason(), "not a valid vertex hierarchy")) << e.what();
+    EXPECT_TRUE(contains(e.reason(), c.reason)) << e.what();
+    EXPECT_TRUE(contains(e.what(), "edit.vmh")) << e.what();
+  }
+}
+
+TEST(HierarchyIo, EncodingAnEmptyHierarchyThrows) {
+  EXPECT_THROW(encode_vertex_hierarchy(VertexHierarchy{}), InvalidInput);
+}
+
+TEST(HierarchyIo, SharedDataBunnyRoundTrip) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/bunny_libigl_3485v.off");
+  const TriMesh m = read_mesh(path);
+  const VertexHierarchy h = build_vertex_hierarchy(m);
+  const auto dir = testing::scratch_dir("hierarchy_io_bunny");
+  const std::string file = (dir / "bunny.vmh").string();
+  write_vertex_hierarchy(file, h);
+  EXPECT_EQ(std::filesystem::file_size(file), layout_of(h, encode_vertex_hierarchy(h)).size);
+  const VertexHierarchy back = read_vertex_hierarchy(file);
+  expect_identical(h, back);
+  expect_same_behaviour(h, back);
+  SrMesh sr(back);
+  sr.refine_all();
+  EXPECT_EQ(sr.num_faces(), h.num_faces());
+  // A stride of flipped bytes over the real file.
+  const Bytes bytes = encode_vertex_hierarchy(back);
+  expect_every_flip_rejected(bytes, bytes.size() / 211 + 1, 0x40);
+}
+
+}  // namespace
+}  // namespace varmesh
