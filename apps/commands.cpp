@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "apps/cli_util.hpp"
+#include "apps/compare.hpp"
 #include "apps/demo.hpp"
 #include "apps/render.hpp"
 #include "fourk/grid48.hpp"
@@ -231,6 +232,10 @@ int run(int argc, char** argv) {
   demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain");
   demo->add_flag("--quiet", da.quiet, "no progress on stderr");
 
+  CompareArgs ca;
+  auto* compare = app.add_subcommand("compare", "Kim-Lee Table 2: three selective refinement schemes on image, terrain and 3D models, table + PNG");
+  add_compare_options(*compare, ca);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -241,6 +246,7 @@ int run(int argc, char** argv) {
     if (*terrain) return cmd_terrain(ta);
     if (*render) return cmd_render(ra);
     if (*demo) return run_demo(da);
+    if (*compare) return run_compare(ca);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "varmesh: error: %s\n", e.what());
     return 1;

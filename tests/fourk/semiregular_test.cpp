@@ -187,14 +187,16 @@ long euler(const TriMesh& m) {
 
 // The dual graph of a mesh, built independently of the library (map of directed edges).
 std::vector<std::vector<Index>> dual_graph(const TriMesh& m) {
-  std::map<std::uint64_t, Index> owner;
+  std::vector<std::pair<std::uint64_t, Index>> owner;
   for (std::size_t f = 0; f < m.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) owner[dkey(m.corner(f, k), m.corner(f, (k + 1) % 3))] = static_cast<Index>(f);
+    for (int k = 0; k < 3; ++k) owner.push_back({dkey(m.corner(f, k), m.corner(f, (k + 1) % 3)), static_cast<Index>(f)});
+  std::sort(owner.begin(), owner.end());
   std::vector<std::vector<Index>> adj(m.num_faces());
   for (std::size_t f = 0; f < m.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const auto it = owner.find(dkey(m.corner(f, (k + 1) % 3), m.corner(f, k)));
-      if (it != owner.end()) adj[f].push_back(it->second);
+      const std::uint64_t rev = dkey(m.corner(f, (k + 1) % 3), m.corner(f, k));
+      const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(rev, Index{0}));
+      if (it != owner.end() && it->first == rev) adj[f].push_back(it->second);
     }
   return adj;
 }

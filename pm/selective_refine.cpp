@@ -1,0 +1,1 @@
+#include "pm/selective_refine.hpp"

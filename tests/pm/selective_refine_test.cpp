@@ -1,0 +1,2 @@
+#include "pm/selective_refine.hpp"
+#include <gtest/gtest.h>
