@@ -1,0 +1,1 @@
+#include "fourk/strips.hpp"

@@ -1,0 +1,2 @@
+#include "fourk/strips.hpp"
+#include <gtest/gtest.h>
