@@ -12,6 +12,7 @@
 #include "apps/cli_util.hpp"
 #include "apps/compare.hpp"
 #include "apps/demo.hpp"
+#include "apps/hierarchy_cmds.hpp"
 #include "apps/render.hpp"
 #include "fourk/grid48.hpp"
 #include "multitri/errors.hpp"
@@ -232,6 +233,13 @@ int run(int argc, char** argv) {
   demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain");
   demo->add_flag("--quiet", da.quiet, "no progress on stderr");
 
+  BuildArgs ba;
+  auto* build = app.add_subcommand("build", "Build a 4-k hierarchy (semiregular, adaptive, simplify4k) and save it as .vrm");
+  add_build_options(*build, ba);
+  QueryArgs qa;
+  auto* query = app.add_subcommand("query", "Extract a front of a .vrm hierarchy by error, camera, ramp or budget");
+  add_query_options(*query, qa);
+
   CompareArgs ca;
   auto* compare = app.add_subcommand("compare", "Kim-Lee Table 2: three selective refinement schemes on image, terrain and 3D models, table + PNG");
   add_compare_options(*compare, ca);
@@ -247,6 +255,8 @@ int run(int argc, char** argv) {
     if (*render) return cmd_render(ra);
     if (*demo) return run_demo(da);
     if (*compare) return run_compare(ca);
+    if (*build) return run_build(ba);
+    if (*query) return run_query(qa);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "varmesh: error: %s\n", e.what());
     return 1;

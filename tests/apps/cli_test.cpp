@@ -48,7 +48,7 @@ int count_lines(const std::string& s) {
 
 TEST(Cli, HelpOnEverySubcommand) {
   const auto dir = testing::scratch_dir("cli_help");
-  for (const char* sub : {"", "info", "terrain", "render", "demo"}) {
+  for (const char* sub : {"", "info", "terrain", "render", "demo", "build", "query", "compare"}) {
     const CmdResult r = run(std::string(sub) + " --help", dir);
     EXPECT_EQ(r.status, 0) << sub;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << sub;
@@ -136,6 +136,43 @@ TEST(Cli, DemoWritesItsFilesAndTheBoundHolds) {
   for (const char* f : {"uniform.obj", "view.obj", "uniform.png", "view_camera.png", "uniform_topdown.png", "view_topdown.png"})
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
   EXPECT_GT(read_mesh((dir / "out" / "view.obj").string()).num_faces(), 100u);
+}
+
+TEST(Cli, BuildThenQueryAdaptiveTorus) {
+  const auto dir = testing::scratch_dir("cli_build_query");
+  CmdResult r = run("build torus --method adaptive -o " + (dir / "t.vrm").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run("query " + (dir / "t.vrm").string() + " --error 0 -o " + (dir / "fine.obj").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const TriMesh fine = read_mesh((dir / "fine.obj").string());
+  EXPECT_EQ(fine.num_faces(), 528u);  // the finest front at the default tolerance (see fourk/adaptive.hpp)
+  r = run("query " + (dir / "t.vrm").string() + " --ramp -3,0,0,3,0,0,0.2,3 -o " + (dir / "ramp.obj").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const TriMesh ramp = read_mesh((dir / "ramp.obj").string());
+  EXPECT_LT(ramp.num_faces(), fine.num_faces());
+  // Finer where the ramp asks for small triangles (x < 0) than where it allows large ones.
+  std::size_t left = 0, right = 0;
+  for (std::size_t f = 0; f < ramp.num_faces(); ++f) (ramp.positions[ramp.indices[3 * f]].x < 0 ? left : right)++;
+  EXPECT_GT(left, right);
+}
+
+TEST(Cli, BuildAndQueryFailCleanly) {
+  const auto dir = testing::scratch_dir("cli_build_bad");
+  CmdResult r = run("build torus --method nonsense -o " + (dir / "x.vrm").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("unknown --method"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "x.vrm"));
+  r = run("build torus --method adaptive -o " + (dir / "x.obj").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  {
+    std::ofstream junk(dir / "junk.vrm", std::ios::binary);
+    junk << "VMSHMT\r\nnot really";
+  }
+  r = run("query " + (dir / "junk.vrm").string() + " --error 1 -o " + (dir / "out.obj").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(count_lines(r.err), 1);
+  EXPECT_NE(r.err.find("junk.vrm"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "out.obj"));
 }
 
 }  // namespace

@@ -1,0 +1,176 @@
+// `varmesh build` and `varmesh query` (see hierarchy_cmds.hpp).
+#include "apps/hierarchy_cmds.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include <CLI/CLI.hpp>
+#include <glm/geometric.hpp>
+
+#include "apps/cli_util.hpp"
+#include "apps/render.hpp"
+#include "fourk/adaptive.hpp"
+#include "multitri/errors.hpp"
+#include "multitri/heightfield.hpp"
+#include "multitri/image.hpp"
+#include "multitri/mesh_io.hpp"
+#include "multitri/mt_front.hpp"
+#include "multitri/mt_io.hpp"
+#include "multitri/mt_metrics.hpp"
+#include "multitri/query.hpp"
+
+namespace varmesh::app {
+
+void add_build_options(CLI::App& sub, BuildArgs& a) {
+  sub.add_option("INPUT", a.input, "mesh (.obj/.off/.ply), height field (.pgm/.png/.raw), or torus | saddle | implicit-torus")->required();
+  sub.add_option("-o,--output", a.output, "output hierarchy (.vrm)")->required();
+  sub.add_option("--method", a.method, "semiregular | adaptive | simplify4k");
+  sub.add_option("--levels", a.levels, "semiregular: binary refinement levels; simplify4k: most levels")->check(CLI::Range(0, 30));
+  sub.add_option("--tolerance", a.tolerance, "adaptive: geometric tolerance (default 1% of the bounding-box diagonal)");
+  sub.add_option("--raw-size", a.raw_size, "W,H of a .raw float32 height field");
+  sub.add_flag("--quiet", a.quiet, "no progress on stderr");
+}
+
+void add_query_options(CLI::App& sub, QueryArgs& a) {
+  sub.add_option("HIERARCHY", a.input, ".vrm file from varmesh build")->required();
+  sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off)")->required();
+  sub.add_option("--error", a.error, "largest node error allowed (object units)");
+  sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
+  sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
+  sub.add_option("--budget", a.budget, "triangle budget");
+  sub.add_option("--png", a.png, "also render the result to this PNG");
+}
+
+namespace {
+
+bool is_mesh_file(const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  return ext == ".obj" || ext == ".off" || ext == ".ply";
+}
+
+AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
+  AdaptiveOptions o;
+  o.tolerance = a.tolerance;
+  if (a.input == "torus" || a.input == "saddle") {
+    const ParametricSurface s = a.input == "torus" ? torus_parametric() : saddle_parametric();
+    if (o.tolerance <= 0.0f) o.tolerance = a.input == "torus" ? 0.0685f : 0.002f;
+    return build_adaptive_parametric(s, o);
+  }
+  if (a.input == "implicit-torus") {
+    if (o.tolerance <= 0.0f) o.tolerance = 0.046f;
+    return build_adaptive_implicit(torus_implicit(), o);
+  }
+  if (is_mesh_file(a.input)) throw InvalidInput("build --method adaptive: give a height field or torus | saddle | implicit-torus, not a mesh");
+  HeightFieldReadOptions ro;
+  if (!a.raw_size.empty()) {
+    const auto wh = parse_floats(a.raw_size, "--raw-size", 2);
+    if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))
+      throw InvalidInput("--raw-size: expected two positive integers W,H");
+    ro.raw_width = static_cast<std::size_t>(wh[0]);
+    ro.raw_height = static_cast<std::size_t>(wh[1]);
+  }
+  const HeightField field = read_heightfield(a.input, ro);
+  if (o.tolerance <= 0.0f) {
+    const auto [lo, hi] = std::minmax_element(field.z.begin(), field.z.end());
+    o.tolerance = std::max(1e-6f, 0.01f * (*hi - *lo));
+  }
+  return build_adaptive_heightfield(field, o);
+}
+
+void print_metrics(const Mt& mt) {
+  const MtMetrics m = compute_metrics(mt);
+  std::printf("hierarchy: %zu nodes, %zu faces (%zu coarsest, %zu finest), %zu vertices, depth %zu, growth %.3f, %.1f bytes per finest face\n",
+              m.nodes, m.faces, m.coarsest_faces, m.finest_faces, mt.num_vertices(), m.depth, m.growth_rate,
+              double(mt.memory_bytes()) / double(std::max<std::size_t>(1, m.finest_faces)));
+}
+
+}  // namespace
+
+int run_build(const BuildArgs& a) {
+  if (std::filesystem::path(a.output).extension() != ".vrm") throw InvalidInput("build: -o must end in .vrm, not '" + a.output + "'");
+  if (!std::isfinite(a.tolerance)) throw InvalidInput("build: --tolerance must be a finite number");
+  Stopwatch watch;
+  Mt mt;
+  if (a.method == "adaptive") {
+    AdaptiveHierarchy h = build_adaptive(a);
+    std::printf("adaptive: %zu base faces, %zu faces at the tolerance, max level %d\n", h.num_base_faces, h.num_finest_faces, h.max_level);
+    mt = std::move(h.mt);
+  } else if (a.method == "semiregular" || a.method == "simplify4k") {
+    throw InvalidInput("build: method '" + a.method + "' is not available in this build yet");
+  } else {
+    throw InvalidInput("build: unknown --method '" + a.method + "' (semiregular, adaptive, simplify4k)");
+  }
+  const double ms = watch.ms();
+  write_mt(a.output, mt);
+  print_metrics(mt);
+  std::printf("built in %.1f ms -> %s\n", ms, a.output.c_str());
+  return 0;
+}
+
+int run_query(const QueryArgs& a) {
+  const std::string ext = std::filesystem::path(a.output).extension().string();
+  if (ext != ".obj" && ext != ".ply" && ext != ".off") throw InvalidInput("query: -o must end in .obj, .ply or .off, not '" + a.output + "'");
+  if (a.error < 0.0f && a.camera.empty() && a.ramp.empty() && a.budget == 0)
+    throw InvalidInput("query: give --error E, --camera ..., --ramp ... or --budget N");
+  const Mt mt = read_mt(a.input);
+  std::vector<Criterion> parts;
+  if (a.error >= 0.0f) {
+    if (!std::isfinite(a.error)) throw InvalidInput("--error must be finite");
+    parts.push_back(Criterion::object_error(a.error));
+  }
+  if (!a.camera.empty()) {
+    const auto c = parse_floats(a.camera, "--camera", 7);
+    Camera cam;
+    cam.eye = {c[0], c[1], c[2]};
+    cam.target = {c[3], c[4], c[5]};
+    cam.fov_y_deg = c[6];
+    if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
+    if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
+    if (!(a.pixels > 0.0f) || !(a.viewport > 0.0f)) throw InvalidInput("--pixels and --viewport must be > 0");
+    cam.z_near = 1e-4f * glm::length(cam.eye - cam.target);
+    cam.z_far = 1e7f;
+    parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
+                                       Criterion::screen_error(cam, a.viewport, a.pixels)}));
+  }
+  if (!a.ramp.empty()) {
+    const auto r = parse_floats(a.ramp, "--ramp", 8);
+    const glm::vec3 p0{r[0], r[1], r[2]}, p1{r[3], r[4], r[5]};
+    const float s0 = r[6], s1 = r[7];
+    if (!(s0 > 0.0f) || !(s1 > 0.0f)) throw InvalidInput("--ramp: sizes must be > 0");
+    const glm::vec3 axis = p1 - p0;
+    const float len2 = glm::dot(axis, axis);
+    if (!(len2 > 0.0f)) throw InvalidInput("--ramp: the two points coincide");
+    // Figure 22 c/d of Velho-Gomes: a node is fine when its region (bounding-sphere diameter) is no larger
+    // than the size the ramp asks for at its centre.
+    parts.push_back(Criterion::custom([=](const ElementBound& b) {
+      const float t = std::clamp(glm::dot(b.center - p0, axis) / len2, 0.0f, 1.0f);
+      return 2.0f * b.radius <= s0 + t * (s1 - s0);
+    }));
+  }
+  Query q;
+  q.criterion = parts.empty() ? Criterion::object_error(0.0f) : parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
+  q.triangle_budget = a.budget;
+  MtFront front(mt);
+  Stopwatch watch;
+  const QueryStats st = extract(front, q);
+  const double ms = watch.ms();
+  const TriMesh mesh = front.to_mesh();
+  write_mesh(a.output, mesh);
+  std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
+              st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  if (!a.png.empty()) {
+    if (std::filesystem::path(a.png).extension() != ".png") throw InvalidInput("--png must end in .png");
+    RenderOptions o;
+    o.width = 1024;
+    o.height = 768;
+    o.wireframe = mesh.num_faces() < 60000;
+    write_png(a.png, render_mesh(mesh, default_camera_for(mesh, 4.0f / 3.0f), o));
+  }
+  return 0;
+}
+
+}  // namespace varmesh::app
