@@ -12,7 +12,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -45,20 +44,38 @@ constexpr std::uint64_t kBoundFloats = 9;    // centre xyz, radius, error, axis 
 constexpr std::uint64_t kRepairFields = 9;
 constexpr std::uint64_t kChecksumBytes = 4;
 
-constexpr std::array<std::uint32_t, 256> make_crc_table() {
-  std::array<std::uint32_t, 256> table{};
+// Slicing-by-8 (M. Kounavis, F. Berry, "A systematic approach to building high performance software-based
+// CRC generators", ISCC 2005): table k gives a byte's contribution k bytes further on, so eight look-ups
+// consume eight bytes at once. Checking a file is a pass over all of it, hence the 8 KB of tables.
+using CrcTables = std::array<std::array<std::uint32_t, 256>, 8>;
+constexpr CrcTables make_crc_tables() {
+  CrcTables t{};
   for (std::uint32_t i = 0; i < 256; ++i) {
     std::uint32_t c = i;
     for (int k = 0; k < 8; ++k) c = (c & 1u) ? (0xEDB88320u ^ (c >> 1)) : (c >> 1);
-    table[i] = c;
+    t[0][i] = c;
   }
-  return table;
+  for (std::size_t k = 1; k < 8; ++k)
+    for (std::size_t i = 0; i < 256; ++i) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFFu];
+  return t;
 }
-constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
+constexpr CrcTables kCrc = make_crc_tables();
+
+std::uint32_t load_le32(const std::uint8_t* p) noexcept {
+  return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
+         static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
+}
 
 std::uint32_t crc32(std::span<const std::uint8_t> bytes) noexcept {
   std::uint32_t c = 0xFFFFFFFFu;
-  for (std::uint8_t b : bytes) c = kCrcTable[(c ^ b) & 0xFFu] ^ (c >> 8);
+  const std::uint8_t* p = bytes.data();
+  std::size_t n = bytes.size();
+  for (; n >= 8; n -= 8, p += 8) {
+    const std::uint32_t lo = c ^ load_le32(p), hi = load_le32(p + 4);
+    c = kCrc[7][lo & 0xFFu] ^ kCrc[6][(lo >> 8) & 0xFFu] ^ kCrc[5][(lo >> 16) & 0xFFu] ^ kCrc[4][lo >> 24] ^
+        kCrc[3][hi & 0xFFu] ^ kCrc[2][(hi >> 8) & 0xFFu] ^ kCrc[1][(hi >> 16) & 0xFFu] ^ kCrc[0][hi >> 24];
+  }
+  for (; n > 0; --n, ++p) c = kCrc[0][(c ^ *p) & 0xFFu] ^ (c >> 8);
   return c ^ 0xFFFFFFFFu;
 }
 
@@ -176,20 +193,20 @@ Counts read_header(ByteReader& in, std::span<const std::uint8_t> bytes) {
   const std::size_t magic_seen = std::min<std::size_t>(size, kMagic.size());
   if (!std::equal(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(magic_seen), kMagic.begin()))
     in.fail("bad magic: not a varmesh vertex hierarchy file (expected it to start with \"VMPMHIER\")", 0);
-  if (size < kOffFlags)
-    in.fail("truncated: the file ends at byte " + std::to_string(size) + ", inside the header", size);
+  const std::string header_cut = size == 0 ? "truncated: the file is empty"
+                                            : "truncated: the file ends at byte " + std::to_string(size) +
+                                                  ", inside the " + std::to_string(kHeaderBytes) + "-byte header";
+  if (size < kOffFlags) in.fail(header_cut, size);
   in.seek(kOffVersion);
   const std::uint32_t version = in.u32();
   if (version != kVertexHierarchyFormatVersion)
     in.fail("unsupported format version " + std::to_string(version) + " (this build reads version " +
                 std::to_string(kVertexHierarchyFormatVersion) + ")",
             kOffVersion);
-  if (size < kHeaderBytes)
-    in.fail("truncated: the file ends at byte " + std::to_string(size) + ", inside the " +
-                std::to_string(kHeaderBytes) + "-byte header",
-            size);
+  if (size < kHeaderBytes) in.fail(header_cut, size);
   const std::uint32_t flags = in.u32();
   if ((flags & ~kKnownFlags) != 0) in.fail("unknown flags " + hex32(flags), kOffFlags);
+  in.seek(kOffSize);
   const std::uint64_t declared = in.u64();
   if (declared > size)
     in.fail("truncated: the file ends at byte " + std::to_string(size) + " but its header declares " +
@@ -232,10 +249,7 @@ Counts read_header(ByteReader& in, std::span<const std::uint8_t> bytes) {
                 std::to_string(size),
             kOffLeaves);
 
-  const std::uint32_t stored = static_cast<std::uint32_t>(bytes[size - 4]) |
-                               static_cast<std::uint32_t>(bytes[size - 3]) << 8 |
-                               static_cast<std::uint32_t>(bytes[size - 2]) << 16 |
-                               static_cast<std::uint32_t>(bytes[size - 1]) << 24;
+  const std::uint32_t stored = load_le32(bytes.data() + (size - kChecksumBytes));
   const std::uint32_t computed = crc32(bytes.first(size - kChecksumBytes));
   if (stored != computed)
     in.fail("checksum mismatch: stored " + hex32(stored) + ", computed " + hex32(computed) + " (the file is corrupt)",

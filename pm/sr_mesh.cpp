@@ -81,31 +81,30 @@ void SrMesh::check_node(Index v, const char* what) const {
 }
 
 bool SrMesh::gather_ring(Index v, std::vector<RingFace>& ring) const {
+  // Counter-clockwise from the stored face; only when a border stops the walk, the clockwise part before
+  // the stored face is walked too and put in front (so an interior vertex costs one turn).
   ring.clear();
   const Index f0 = vface_[v];
   Index f = f0;
-  // Rotate clockwise to the start of the fan (a border edge) or all the way round.
-  bool closed = false;
-  for (;;) {
-    const int k = corner_of(corners_, f, v);
-    const Index prev = adj_[3 * f + k];
-    if (prev == kInvalid) break;
-    if (prev == f0) {
-      closed = true;
-      break;
-    }
-    f = prev;
-  }
-  const Index start = closed ? f0 : f;
-  f = start;
   for (;;) {
     const int k = corner_of(corners_, f, v);
     ring.push_back({f, k});
     const Index next = adj_[3 * f + (k + 2) % 3];
-    if (next == kInvalid || next == start) break;
+    if (next == f0) return true;
+    if (next == kInvalid) break;
     f = next;
   }
-  return closed;
+  const std::size_t ccw = ring.size();
+  f = f0;
+  for (;;) {
+    const Index prev = adj_[3 * f + corner_of(corners_, f, v)];
+    if (prev == kInvalid) break;
+    f = prev;
+    ring.push_back({f, corner_of(corners_, f, v)});
+  }
+  std::reverse(ring.begin() + static_cast<std::ptrdiff_t>(ccw), ring.end());
+  std::rotate(ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(ccw), ring.end());
+  return false;
 }
 
 Index SrMesh::find_cut_vertex(Index leaf, std::span<const RingFace> ring, bool closed) const {
@@ -120,9 +119,9 @@ Index SrMesh::find_cut_vertex(Index leaf, std::span<const RingFace> ring, bool c
   return kInvalid;
 }
 
-void SrMesh::do_vsplit(Index vs, Index vl, Index vr) {
+void SrMesh::do_vsplit(Index vs, Index vl, Index vr, bool closed) {
+  // ring_ holds the 1-ring of vs (gather_ring), `closed` its kind.
   const CollapseRecord& r = h_->record(vs);
-  const bool closed = gather_ring(vs, ring_);
   const int m = static_cast<int>(ring_.size());
   const int nn = closed ? m : m + 1;  // neighbours a_0 .. a_{m-1} (+ b_{m-1} when open)
   auto nb = [&](int i) { return i < m ? neighbor_a(ring_[static_cast<std::size_t>(i)]) : neighbor_b(ring_.back()); };
@@ -186,11 +185,10 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr) {
 }
 
 void SrMesh::do_ecol(Index vs) {
+  // ring_ and ring2_ hold the 1-rings of vt and vu (left there by extra_common_neighbors).
   const CollapseRecord& r = h_->record(vs);
-  for (Index c : {r.vt, r.vu}) {
-    gather_ring(c, ring_);
-    for (const RingFace& rf : ring_) corners_[3 * rf.face + rf.corner] = vs;
-  }
+  for (const auto* ring : {&ring_, &ring2_})
+    for (const RingFace& rf : *ring) corners_[3 * rf.face + rf.corner] = vs;
   Index keep = kInvalid;
   auto relink = [&](Index dying, Index x, Index y) {
     // x and y were across two edges of `dying`; they become neighbours of each other.
@@ -228,9 +226,9 @@ bool SrMesh::extra_common_neighbors(Index vs) const {
   const Index vl = r.fl_hat != kInvalid ? corners_[3 * r.fl_hat + 2] : kInvalid;
   const Index vr = r.fr_hat != kInvalid ? corners_[3 * r.fr_hat + 2] : kInvalid;
   ++stamp_;
-  const bool closed_t = gather_ring(r.vt, ring2_);
-  for (const RingFace& rf : ring2_) mark_[neighbor_a(rf)] = stamp_;
-  if (!closed_t && !ring2_.empty()) mark_[neighbor_b(ring2_.back())] = stamp_;
+  const bool closed_t = gather_ring(r.vt, ring_);
+  for (const RingFace& rf : ring_) mark_[neighbor_a(rf)] = stamp_;
+  if (!closed_t && !ring_.empty()) mark_[neighbor_b(ring_.back())] = stamp_;
   const bool closed_u = gather_ring(r.vu, ring2_);
   auto extra = [&](Index n) { return n != vl && n != vr && n != r.vt && mark_[n] == stamp_; };
   for (const RingFace& rf : ring2_)
@@ -278,7 +276,7 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
       vsplit_kim_lee(vl);
       continue;
     }
-    do_vsplit(vs, vl, vr);
+    do_vsplit(vs, vl, vr, closed);
     return true;
   }
 }

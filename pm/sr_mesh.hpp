@@ -141,8 +141,8 @@ class SrMesh {
   Index neighbor_a(const RingFace& rf) const noexcept { return corners_[3 * rf.face + (rf.corner + 1) % 3]; }
   Index neighbor_b(const RingFace& rf) const noexcept { return corners_[3 * rf.face + (rf.corner + 2) % 3]; }
 
-  void do_vsplit(Index vs, Index vl, Index vr);  // the physical operation, cut vertices given
-  void do_ecol(Index vs);
+  void do_vsplit(Index vs, Index vl, Index vr, bool closed);  // the physical operation on ring_, cut vertices given
+  void do_ecol(Index vs);  // uses ring_/ring2_ left by extra_common_neighbors(vs)
   Index find_cut_vertex(Index leaf, std::span<const RingFace> ring, bool closed) const;
   bool vsplit_kim_lee(Index vs);
   bool vsplit_hoppe(Index vs);
