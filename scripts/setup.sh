@@ -1,13 +1,26 @@
 #!/usr/bin/env bash
 # One idempotent set-up: installs the Debian packages varmesh needs (only those missing), then configures
-# and builds the Release tree in build/release. Usage: scripts/setup.sh [--asan] [--no-build]
+# and builds the Release tree in build/release. Usage: scripts/setup.sh [--asan] [--bench] [--no-build]
 #   --asan      also configure and build the Debug + ASan/UBSan tree in build/asan
+#   --bench     also install the peer libraries the benchmarks compare against (meshoptimizer, OpenMesh)
 #   --no-build  install packages only
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+build_asan=0
+build=1
+bench=0
+for a in "$@"; do
+  case "$a" in
+    --asan) build_asan=1 ;;
+    --bench) bench=1 ;;
+    --no-build) build=0 ;;
+    *) echo "setup: unknown option $a" >&2; exit 2 ;;
+  esac
+done
 packages=(cmake g++ make libeigen3-dev libglm-dev libosd-dev libgtest-dev libgmock-dev libbenchmark-dev
           libpng-dev libcli11-dev zlib1g-dev)
+[ $bench -eq 1 ] && packages+=(libmeshoptimizer-dev libopenmesh-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -20,15 +33,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
-build_asan=0
-build=1
-for a in "$@"; do
-  case "$a" in
-    --asan) build_asan=1 ;;
-    --no-build) build=0 ;;
-    *) echo "setup: unknown option $a" >&2; exit 2 ;;
-  esac
-done
 [ $build -eq 1 ] || exit 0
 
 jobs=$(nproc)
