@@ -264,7 +264,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, Index fl, Index f
     std::vector<Index>().swap(vfaces_[v]);
   }
   for (Index f : merged) {
-    const glm::dvec3 n = face_normal(f, kInvalid, pl.p);
+    const glm::dvec3 n = face_normal(f, vs, pl.p);
     const double len = glm::length(n);
     if (len > 0.0) cone = enclose(cone, NormalCone{glm::vec3(n / len), 1.0f});
   }

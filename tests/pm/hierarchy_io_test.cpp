@@ -46,6 +46,7 @@ void* guarded_alloc(std::size_t n) noexcept {
 // GCC sees the std::free of a pointer that came from operator new once these are inlined into the standard
 // allocators; that pairing is exactly what a replacement does, so the diagnostic does not apply here.
 #if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 #endif
 void* operator new(std::size_t n) {
@@ -64,6 +65,9 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 namespace varmesh {
 namespace {
@@ -219,8 +223,11 @@ std::vector<std::array<Index, 4>> faces_of(const SrMesh& sr) {
 }
 
 // SrMesh runs identically on both: the same faces after a partial refinement, refine_all and coarsen_all.
-void expect_same_behaviour(const VertexHierarchy& a, const VertexHierarchy& b) {
-  for (RefinementScheme s : {RefinementScheme::kKimLee, RefinementScheme::kHoppe97, RefinementScheme::kXiaVarshney}) {
+constexpr RefinementScheme kAllSchemes[] = {RefinementScheme::kKimLee, RefinementScheme::kHoppe97,
+                                           RefinementScheme::kXiaVarshney};
+void expect_same_behaviour(const VertexHierarchy& a, const VertexHierarchy& b,
+                           std::span<const RefinementScheme> schemes = kAllSchemes) {
+  for (RefinementScheme s : schemes) {
     SrMesh sa(a, s), sb(b, s);
     EXPECT_EQ(faces_of(sa), faces_of(sb)) << scheme_name(s) << " base mesh";
     // Split every other active non-leaf vertex, in id order.
@@ -282,7 +289,7 @@ void round_trip(const VertexHierarchy& h, const std::string& what) {
 }
 
 TEST(HierarchyIo, RoundTripGeneratedMeshes) {
-  round_trip(build_vertex_hierarchy(make_icosphere(3)), "icosphere");
+  round_trip(build_vertex_hierarchy(make_icosphere(2)), "icosphere");
   round_trip(build_vertex_hierarchy(make_grid(12, 9)), "grid (border)");
   round_trip(build_vertex_hierarchy(testing::concat(make_torus(16, 10), make_icosphere(1), {3, 0, 0})), "torus + sphere");
   QemOptions partial;
@@ -419,9 +426,9 @@ void expect_every_flip_rejected(const Bytes& full, std::size_t stride, std::uint
 TEST(HierarchyIo, EveryFlippedByteIsRejected) {
   const Bytes small = encode_vertex_hierarchy(build_locked_colored(4));
   expect_every_flip_rejected(small, 1, 0);  // every byte, each bit position in turn
-  expect_every_flip_rejected(small, 7, 0xFF);
+  expect_every_flip_rejected(small, 13, 0xFF);
   const Bytes large = encode_vertex_hierarchy(build_vertex_hierarchy(make_icosphere(3)));
-  expect_every_flip_rejected(large, large.size() / 97 + 1, 0x10);
+  expect_every_flip_rejected(large, large.size() / 61 + 1, 0x10);
 }
 
 TEST(HierarchyIo, TrailingBytesAreRejected) {
@@ -572,13 +579,14 @@ TEST(HierarchyIo, SharedDataBunnyRoundTrip) {
   EXPECT_EQ(std::filesystem::file_size(file), layout_of(h, encode_vertex_hierarchy(h)).size);
   const VertexHierarchy back = read_vertex_hierarchy(file);
   expect_identical(h, back);
-  expect_same_behaviour(h, back);
+  const RefinementScheme kim_lee[] = {RefinementScheme::kKimLee};  // baselines: generated meshes above
+  expect_same_behaviour(h, back, kim_lee);
   SrMesh sr(back);
   sr.refine_all();
   EXPECT_EQ(sr.num_faces(), h.num_faces());
   // A stride of flipped bytes over the real file.
   const Bytes bytes = encode_vertex_hierarchy(back);
-  expect_every_flip_rejected(bytes, bytes.size() / 31 + 1, 0x40);
+  expect_every_flip_rejected(bytes, bytes.size() / 11 + 1, 0x40);
 }
 
 }  // namespace
