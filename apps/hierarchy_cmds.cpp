@@ -12,6 +12,7 @@
 #include "apps/cli_util.hpp"
 #include "apps/render.hpp"
 #include "fourk/adaptive.hpp"
+#include "fourk/semiregular.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/image.hpp"
@@ -99,7 +100,14 @@ int run_build(const BuildArgs& a) {
     AdaptiveHierarchy h = build_adaptive(a);
     std::printf("adaptive: %zu base faces, %zu faces at the tolerance, max level %d\n", h.num_base_faces, h.num_finest_faces, h.max_level);
     mt = std::move(h.mt);
-  } else if (a.method == "semiregular" || a.method == "simplify4k") {
+  } else if (a.method == "semiregular") {
+    if (!is_mesh_file(a.input)) throw InvalidInput("build --method semiregular: INPUT must be a mesh (.obj, .off, .ply)");
+    const TriMesh base = read_mesh(a.input);
+    SemiRegularInfo info;
+    mt = build_semiregular_mt(base, a.levels, {}, &info);
+    std::printf("semiregular: %zu base faces paired into %zu blocks (%zu left over, split 1->2 on the border), %d levels\n",
+                base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, a.levels);
+  } else if (a.method == "simplify4k") {
     throw InvalidInput("build: method '" + a.method + "' is not available in this build yet");
   } else {
     throw InvalidInput("build: unknown --method '" + a.method + "' (semiregular, adaptive, simplify4k)");

@@ -37,7 +37,9 @@
 /// 6. children have the corners listed above, up to a cyclic shift of a child that is still current (one
 ///    new vertex shared by all children of a split, not a corner of the pre-image); the log lists every
 ///    modification once.
-/// Consequently to_mt() yields a valid Multi-Triangulation (MtBuilder::build re-checks the definition).
+/// Every modification is then minimally compatible (section 3.1), so to_mt() yields a valid
+/// Multi-Triangulation unless a swap recreated a face that existed before (non-redundancy), which
+/// MtBuilder::build reports.
 #include <array>
 #include <cstddef>
 #include <cstdint>
