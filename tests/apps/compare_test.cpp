@@ -1,1 +1,142 @@
+// `varmesh compare` as a user runs it: the quick run writes its table and pictures and exits 0, the ordering
+// line is printed per case, missing data falls back to generated inputs, and bad options fail with exit
+// code 1 and a one-line error.
 #include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "multitri/image.hpp"
+#include "test_support.hpp"
+
+namespace varmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CmdResult {
+  int status;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+CmdResult run(const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string cmd = std::string(VARMESH_EXE) + " compare " + args + " >" + out.string() + " 2>" + err.string();
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
+}
+
+int count(const std::string& s, const std::string& what) {
+  int n = 0;
+  for (std::size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
+  return n;
+}
+
+// Generated inputs only (an empty data folder), all five cases, small panels: fast under sanitizers.
+TEST(Compare, QuickRunOnGeneratedInputsWritesTableAndPictures) {
+  const fs::path dir = testing::scratch_dir("compare_quick");
+  const fs::path empty = dir / "no_data";
+  fs::create_directories(empty);
+  const fs::path out = dir / "out";
+  const CmdResult r = run("--quick --quiet --panel 96 --size 16 --out " + out.string() + " --data " + empty.string(), dir);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  for (const char* name : {"image", "terrain", "bunny", "cow", "dragon"}) {
+    SCOPED_TRACE(name);
+    EXPECT_NE(r.out.find(std::string(name) + ": kim-lee <= hoppe97 <= xia-varshney in #V and #F: "), std::string::npos) << r.out;
+    for (const char* kind : {"_schemes.png", "_dual_pieces.png"}) {
+      const Image img = read_png((out / (std::string(name) + kind)).string());
+      EXPECT_EQ(img.width, 3u * 96u);
+      EXPECT_EQ(img.height, std::string(name) == "image" && std::string(kind) == "_schemes.png" ? 2u * 96u : 96u);
+    }
+  }
+  EXPECT_EQ(read_png((out / "image_features.png").string()).width, 2u * 96u);
+  EXPECT_EQ(count(r.out, "generated"), 5) << r.out;
+  // The table: every row of Table 2, one column per case and scheme.
+  for (const char* row : {"#V", "#F", "#DC", "forced vsplits", "forced ecols", "time ms"})
+    EXPECT_NE(r.out.find(std::string("\n") + row + " "), std::string::npos) << row;
+  const std::string md = slurp(out / "table.md");
+  EXPECT_EQ(count(md, "kim-lee <= hoppe97"), 5);
+  EXPECT_EQ(count(md, "| image kim-lee |"), 1);
+  const std::string csv = slurp(out / "table.csv");
+  EXPECT_EQ(count(csv, "\n"), 1 + 5 * 3);
+  // Kim-Lee forces nothing, and no scheme misses a required vertex on these inputs.
+  std::istringstream lines(csv);
+  std::string line;
+  std::getline(lines, line);
+  while (std::getline(lines, line)) {
+    std::vector<std::string> f;
+    std::string cell;
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) {
+        f.push_back(cell);
+        cell.clear();
+      } else cell += c;
+    }
+    f.push_back(cell);
+    ASSERT_EQ(f.size(), 19u) << line;
+    EXPECT_EQ(f[15], "0") << "missing vertices: " << line;
+    if (f[8] == "kim-lee") {
+      EXPECT_EQ(f[12], "0") << line;
+      EXPECT_EQ(f[13], "0") << line;
+    }
+  }
+  EXPECT_TRUE(fs::exists(out / "compare_notes.md"));
+}
+
+TEST(Compare, SharedDataQuickRun) {
+  VARMESH_REQUIRE_SHARED(cow, "meshes/cow_cgal_2904v.off");
+  const fs::path dir = testing::scratch_dir("compare_shared");
+  const fs::path out = dir / "out";
+  const CmdResult r = run("--quick --quiet --panel 96 --size 16 --cases image,cow --out " + out.string() + " --data " +
+                              testing::shared_data(""),
+                          dir);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("cow_cgal_2904v.off"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("peppers_256_gray.png"), std::string::npos) << r.out;
+  EXPECT_EQ(count(r.out, "generated"), 0) << r.out;
+  EXPECT_NE(r.out.find("cow: kim-lee <= hoppe97 <= xia-varshney in #V and #F: holds"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(out / "cow_schemes.png"));
+  EXPECT_FALSE(fs::exists(out / "terrain_schemes.png"));
+}
+
+TEST(Compare, BadOptionsFailWithOneLineAndExitCode1) {
+  const fs::path dir = testing::scratch_dir("compare_bad");
+  const std::string out = " --out " + (dir / "out").string();
+  struct Case {
+    std::string args, expect;
+  };
+  for (const Case& c : {Case{"--cases image,teapot", "unknown case 'teapot'"}, Case{"--cases ,", "lists no case"},
+                        Case{"--features 0", "--features"}, Case{"--features 1.5", "--features"},
+                        Case{"--features abc", "--features"}, Case{"--size 3", "--size"}, Case{"--size 12.5", "--size"},
+                        Case{"--panel big", "--panel"}, Case{"--data " + (dir / "nowhere").string(), "nowhere"},
+                        Case{"--image " + (dir / "missing.png").string(), "missing.png"}}) {
+    SCOPED_TRACE(c.args);
+    const CmdResult r = run(c.args + out, dir);
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(count(r.err, "\n"), 1) << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out" / "table.md"));
+  }
+  // An unreadable image file is an I/O error naming it.
+  std::ofstream(dir / "bad.png") << "not a png";
+  const CmdResult r = run("--cases image --image " + (dir / "bad.png").string() + out, dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bad.png"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace varmesh
