@@ -13,6 +13,7 @@
 #include "apps/render.hpp"
 #include "fourk/adaptive.hpp"
 #include "fourk/semiregular.hpp"
+#include "fourk/simplify4k.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/image.hpp"
@@ -28,9 +29,10 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
   sub.add_option("INPUT", a.input, "mesh (.obj/.off/.ply), height field (.pgm/.png/.raw), or torus | saddle | implicit-torus")->required();
   sub.add_option("-o,--output", a.output, "output hierarchy (.vrm)")->required();
   sub.add_option("--method", a.method, "semiregular | adaptive | simplify4k");
-  sub.add_option("--levels", a.levels, "semiregular: binary refinement levels; simplify4k: most levels")->check(CLI::Range(0, 30));
+  sub.add_option("--levels", a.levels, "semiregular: binary refinement levels (default 4); simplify4k: most levels (0: all)")->check(CLI::Range(-1, 64));
   sub.add_option("--tolerance", a.tolerance, "adaptive: geometric tolerance (default 1% of the bounding-box diagonal)");
   sub.add_option("--raw-size", a.raw_size, "W,H of a .raw float32 height field");
+  sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder");
   sub.add_flag("--quiet", a.quiet, "no progress on stderr");
 }
 
@@ -89,6 +91,24 @@ void print_metrics(const Mt& mt) {
               double(mt.memory_bytes()) / double(std::max<std::size_t>(1, m.finest_faces)));
 }
 
+void write_level_picture(const std::string& dir, const std::string& name, const TriMesh& mesh, const Camera& cam) {
+  RenderOptions o;
+  o.width = 640;
+  o.height = 480;
+  o.wireframe = mesh.num_faces() < 30000;
+  o.smooth = false;
+  const std::string path = (std::filesystem::path(dir) / name).string();
+  write_png(path, render_mesh(mesh, cam, o));
+  std::printf("  %s: %zu faces\n", path.c_str(), mesh.num_faces());
+}
+
+void prepare_picture_dir(const std::string& dir) {
+  if (dir.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw IoError(dir, "cannot create the pictures folder: " + ec.message());
+}
+
 }  // namespace
 
 int run_build(const BuildArgs& a) {
@@ -99,16 +119,65 @@ int run_build(const BuildArgs& a) {
   if (a.method == "adaptive") {
     AdaptiveHierarchy h = build_adaptive(a);
     std::printf("adaptive: %zu base faces, %zu faces at the tolerance, max level %d\n", h.num_base_faces, h.num_finest_faces, h.max_level);
+    if (!a.pictures.empty()) {
+      prepare_picture_dir(a.pictures);
+      MtFront fine(h.mt);
+      for (NodeId n = 1; n < h.mt.num_nodes(); ++n) fine.refine(n);
+      const TriMesh mesh = fine.to_mesh();
+      write_level_picture(a.pictures, "adaptive_surface.png", mesh, default_camera_for(mesh, 4.0f / 3.0f));
+      if (!h.domain.empty()) {
+        const TriMesh dom = adaptive_domain_mesh(h);
+        Camera top = default_camera_for(dom, 4.0f / 3.0f);
+        const glm::vec3 c = dom.bounds().center();
+        top.target = c;
+        top.eye = c + glm::vec3(0.0f, 0.0f, 1.25f * dom.bounds().diagonal());
+        top.up = {0.0f, 1.0f, 0.0f};
+        top.z_near = 0.1f * dom.bounds().diagonal();
+        top.z_far = 10.0f * dom.bounds().diagonal();
+        write_level_picture(a.pictures, "adaptive_domain.png", dom, top);
+      }
+    }
     mt = std::move(h.mt);
   } else if (a.method == "semiregular") {
     if (!is_mesh_file(a.input)) throw InvalidInput("build --method semiregular: INPUT must be a mesh (.obj, .off, .ply)");
     const TriMesh base = read_mesh(a.input);
     SemiRegularInfo info;
-    mt = build_semiregular_mt(base, a.levels, {}, &info);
+    const int levels = a.levels < 0 ? 4 : a.levels;
+    mt = build_semiregular_mt(base, levels, {}, &info);
     std::printf("semiregular: %zu base faces paired into %zu blocks (%zu left over, split 1->2 on the border), %d levels\n",
-                base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, a.levels);
+                base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, levels);
+    if (!a.pictures.empty()) {
+      prepare_picture_dir(a.pictures);
+      const Camera cam = default_camera_for(base, 4.0f / 3.0f);
+      MtFront front(mt);
+      std::vector<NodeId> by_level;
+      for (int level = 0; level <= levels; ++level) {
+        for (NodeId n = 1; n < mt.num_nodes(); ++n)
+          if (info.node_level[n] == level) front.refine(n);
+        write_level_picture(a.pictures, "semiregular_level" + std::to_string(level) + ".png", front.to_mesh(), cam);
+      }
+    }
   } else if (a.method == "simplify4k") {
-    throw InvalidInput("build: method '" + a.method + "' is not available in this build yet");
+    if (!is_mesh_file(a.input)) throw InvalidInput("build --method simplify4k: INPUT must be a mesh (.obj, .off, .ply)");
+    const TriMesh input = read_mesh(a.input);
+    Simplify4kOptions so;
+    so.max_levels = a.levels > 0 ? a.levels : 64;  // 0 or unset: as many levels as it can
+    Simplify4kResult r = simplify4k(input, so);
+    std::printf("simplify4k: %zu levels, %zu split nodes, %zu swap nodes; faces per level:", r.num_levels(), r.num_split_nodes,
+                r.num_swap_nodes);
+    for (const Simplify4kLevel& l : r.levels) std::printf(" %zu", l.faces);
+    std::printf("\n");
+    if (!a.pictures.empty()) {
+      prepare_picture_dir(a.pictures);
+      const Camera cam = default_camera_for(input, 4.0f / 3.0f);
+      // The levels nearest to the face counts of Velho-Gomes Figure 21, plus the input.
+      std::vector<std::size_t> levels{0};
+      for (std::size_t target : {1200u, 700u, 400u, 300u, 200u}) levels.push_back(simplify4k_closest_level(r, target));
+      levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+      for (std::size_t level : levels)
+        write_level_picture(a.pictures, "simplify4k_level" + std::to_string(level) + ".png", simplify4k_level_mesh(r, level), cam);
+    }
+    mt = std::move(r.mt);
   } else {
     throw InvalidInput("build: unknown --method '" + a.method + "' (semiregular, adaptive, simplify4k)");
   }

@@ -12,9 +12,10 @@ struct BuildArgs {
   std::string input;   ///< mesh file, height field, or a built-in surface: torus, saddle, implicit-torus
   std::string output;  ///< .vrm
   std::string method = "semiregular";
-  int levels = 4;              ///< semiregular: binary levels; simplify4k: at most this many levels
+  int levels = -1;             ///< semiregular: binary levels (default 4); simplify4k: at most this many (default all)
   float tolerance = -1.0f;     ///< adaptive: geometric tolerance (default: 1% of the bounding-box diagonal)
   std::string raw_size;        ///< adaptive on a .raw height field
+  std::string pictures;        ///< folder for PNGs of the levels (semiregular, simplify4k) or the result (adaptive)
   bool quiet = false;
 };
 struct QueryArgs {

@@ -4,8 +4,11 @@
 // construction: collapse four-face clusters around degree-4 vertices, edge swaps where the connectivity is
 // irregular, interleaved levels, stored as an increasing structure), Figure 21 (the cow levels), 7.1/7.2
 // (the two node kinds: internal edge split 2 -> 4 and internal edge swap 2 -> 2), 3.1 (minimally compatible
-// modifications, non-redundancy). The closest point on a triangle follows the region classification of
-// C. Ericson, "Real-Time Collision Detection" (2005), 5.1.5.
+// modifications, non-redundancy). The projection-mode bound is the "successive mapping" idea of J. Cohen,
+// D. Manocha, M. Olano, "Simplifying polygonal models using successive mappings" (1997): one planar
+// projection shared by the old and new triangulations gives a point-to-point correspondence whose distance
+// is affine on the cells of their overlay. The closest point on a triangle follows the region
+// classification of C. Ericson, "Real-Time Collision Detection" (2005), 5.1.5.
 //
 // Why plans: removing a vertex v of degree d by d - 4 spoke swaps and one 4 -> 2 collapse retriangulates v's
 // star polygon, and every triangulation of a polygon can be peeled ear by ear down to a quadrilateral, so
@@ -16,6 +19,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <numbers>
 #include <queue>
@@ -103,6 +107,75 @@ FaceShape face_shape(const DVec& a, const DVec& b, const DVec& c) {
   return f;
 }
 
+// A triangle in projection coordinates: x, y in the plane, z = height along the axis.
+using Tri2 = std::array<DVec, 3>;
+
+// Largest height difference between two counter-clockwise triangles over the overlap of their projections
+// (the vertices of the clipped polygon suffice: the difference of two linear height functions is affine
+// there); -1 when the overlap has no area.
+double overlap_height_gap(const Tri2& A, const Tri2& F) {
+  auto cross = [](const DVec& o, const DVec& a, const DVec& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+  };
+  // Separated (touching at most): the overlap has no area, and its points are also vertices of the
+  // overlaps with the neighbouring faces, so it adds nothing.
+  for (int e = 0; e < 3; ++e) {
+    const DVec &a0 = A[e], &a1 = A[(e + 1) % 3], &f0 = F[e], &f1 = F[(e + 1) % 3];
+    if (cross(a0, a1, F[0]) <= 0.0 && cross(a0, a1, F[1]) <= 0.0 && cross(a0, a1, F[2]) <= 0.0) return -1.0;
+    if (cross(f0, f1, A[0]) <= 0.0 && cross(f0, f1, A[1]) <= 0.0 && cross(f0, f1, A[2]) <= 0.0) return -1.0;
+  }
+  std::array<DVec, 9> poly{}, next{};
+  std::size_t n = 3;
+  std::copy(F.begin(), F.end(), poly.begin());
+  for (int e = 0; e < 3 && n > 0; ++e) {  // Sutherland-Hodgman against the anchor's edges
+    const DVec &a = A[e], &b = A[(e + 1) % 3];
+    std::size_t m = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const DVec& p = poly[i];
+      const DVec& q = poly[(i + 1) % n];
+      const double sp = cross(a, b, p), sq = cross(a, b, q);
+      if (sp >= 0.0 && m < next.size()) next[m++] = p;
+      if (((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0)) && m < next.size()) next[m++] = p + (q - p) * (sp / (sp - sq));
+    }
+    poly = next;
+    n = m;
+  }
+  if (n == 0) return -1.0;
+  auto height = [&](const Tri2& T, const DVec& q) {
+    const double det = cross(T[0], T[1], T[2]);
+    const double l0 = cross(q, T[1], T[2]) / det, l1 = cross(T[0], q, T[2]) / det;
+    return l0 * T[0].z + l1 * T[1].z + (1.0 - l0 - l1) * T[2].z;
+  };
+  double worst = 0.0;
+  for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, std::abs(height(A, poly[i]) - height(F, poly[i])));
+  return worst;
+}
+
+// A vector of at most 16 items without heap allocation (the rings of a plan search).
+template <class T>
+struct SmallVec {
+  std::array<T, 16> items{};
+  std::size_t count = 0;
+  SmallVec() = default;
+  SmallVec(std::initializer_list<T> list) { for (const T& x : list) push_back(x); }
+  template <class It>
+  void assign(It first, It last) {
+    count = 0;
+    for (; first != last; ++first) push_back(*first);
+  }
+  void push_back(const T& x) {
+    if (count == items.size()) throw std::logic_error("simplify4k: ring too large");
+    items[count++] = x;
+  }
+  void erase_at(std::size_t i) {
+    for (std::size_t j = i + 1; j < count; ++j) items[j - 1] = items[j];
+    --count;
+  }
+  std::size_t size() const noexcept { return count; }
+  T& operator[](std::size_t i) noexcept { return items[i]; }
+  const T& operator[](std::size_t i) const noexcept { return items[i]; }
+};
+
 // A face of a plan: an existing face (id set) or one the plan would create.
 struct PFace {
   std::array<VertexId, 3> v{};
@@ -127,6 +200,7 @@ struct Plan {
   double cost = std::numeric_limits<double>::infinity();  // largest h of the faces left at the end
   double quality = -1.0;                                    // worst quality of those faces
   int swaps = 0;
+  bool blocked = false;  // no plan because of faces frozen at this level (may change next level)
   bool valid() const noexcept { return !steps.empty(); }
 };
 
@@ -150,8 +224,8 @@ class Simplifier {
   struct Search {
     VertexId v = kInvalid;
     bool closed = true;
-    std::vector<VertexId> ring;
-    std::vector<Index> ringf;  // pool indices, same convention as Star::faces
+    SmallVec<VertexId> ring;
+    SmallVec<Index> ringf;  // pool indices, same convention as Star::faces
     std::vector<Index> ears;   // pool indices of faces a swap left outside the shrinking star
     std::vector<Index> anchors;  // pool indices of the existing faces the plan replaces
     double qthr = 0.0;
@@ -159,6 +233,7 @@ class Simplifier {
     bool proj = false;
     DVec axis{0.0}, e1{0.0}, e2{0.0};
     std::vector<std::pair<VertexId, DVec>> projected;  // region vertex -> (e1, e2, axis) coordinates
+    std::vector<Tri2> anchors2;                         // the anchors in those coordinates
     // What does not depend on the path to a face (many ear orders reach the same faces): its shape, whether
     // its triple ever existed, which of its edges exist (bit k: edge k, bit k+3: edge k reversed was ever
     // made), and in projection mode its bound.
@@ -170,6 +245,10 @@ class Simplifier {
       double h;  // < 0: not computed yet
     };
     std::vector<Known> known;
+    // Faces are triples of region vertices (v, its ring, the outer vertex at degree 3): `slot` maps their
+    // local indices (4 bits each) to an entry of `known`, -1 when absent.
+    SmallVec<VertexId> region;
+    std::array<std::int16_t, 4096> slot;
     Plan cur, best;
   };
 
@@ -180,13 +259,21 @@ class Simplifier {
   PFace existing(FaceId f) const;
   Plan best_plan(VertexId v, std::uint16_t level);
   bool setup_projection(Search& s, std::size_t star_faces) const;
-  double mapping_distance(const Search& s, const PFace& anchor, const PFace& f) const;
   Search::Known& know(Search& s, const std::array<VertexId, 3>& t) const;
+  double projected_bound(Search& s, Index known) const;
+  static const DVec& projected(const Search& s, VertexId v) {
+    for (const auto& [w, c] : s.projected)
+      if (w == v) return c;
+    throw std::logic_error("simplify4k: vertex outside the projected region");
+  }
   bool try_step(Search& s, NodeKind kind, std::span<const Index> old,
                 std::span<const std::array<VertexId, 3>> created);
   void search_ring(Search& s);
   void finish(Search& s);
   bool better(const Plan& a, const Plan& b) const;
+  bool dihedral_ok(const std::vector<PFace>& pool, std::span<const Index> fin) const;
+  bool still_valid(const Plan& p, std::uint16_t level) const;
+  std::uint64_t signature(VertexId v) const;
   void execute(const Plan& plan, VertexId v, std::uint16_t level, Simplify4kLevel& stats);
   void remove_face(FaceId f);
   FaceId add_face(const std::array<VertexId, 3>& v, double h, std::uint16_t frozen);
@@ -201,9 +288,10 @@ class Simplifier {
   std::vector<VertexId> fv_;  // 3 per face, every face ever made
   std::vector<std::uint8_t> alive_;
   std::vector<double> h_;
-  std::vector<std::uint16_t> frozen_;
-  std::vector<std::uint16_t> blocked_;  // per vertex: the last level that froze one of its faces  // level whose collapse created the face (0: input or a swap)
-  std::vector<FaceId> vface_;        // an alive face at each vertex
+  std::vector<std::uint16_t> frozen_;   // per face: level whose collapse created it (0: input or a swap)
+  std::vector<std::uint16_t> blocked_;  // per vertex: the last level that froze one of its faces
+  std::vector<std::uint32_t> touch_;    // per vertex: faces created or removed at it so far
+  std::vector<FaceId> vface_;           // per vertex: an alive face at it
   std::vector<std::uint8_t> vstate_;
   std::unordered_map<std::uint64_t, FaceId> he_;  // directed edge of an alive face -> face
   std::unordered_set<Triple, TripleHash> triples_;  // every vertex triple ever made (non-redundancy)
@@ -249,6 +337,7 @@ void Simplifier::load_input() {
   triples_.reserve(nf * 2);
   vface_.assign(nv, kInvalid);
   blocked_.assign(nv, 0);
+  touch_.assign(nv, 0);
   std::vector<Index> incident(nv, 0);
   for (std::size_t f = 0; f < nf; ++f) {
     const VertexId a = fv_[3 * f], b = fv_[3 * f + 1], c = fv_[3 * f + 2];
@@ -330,6 +419,16 @@ bool Simplifier::collect_star(VertexId v, Star& s, std::size_t cap) const {
   return true;
 }
 
+// Changes whenever a face at v or at one of its neighbours is created or removed: everything a plan for v
+// depends on besides the level (its star, the faces beyond its ring, the edges between its ring vertices).
+std::uint64_t Simplifier::signature(VertexId v) const {
+  Star s;
+  std::uint64_t sum = touch_[v];
+  if (collect_star(v, s, 64))
+    for (VertexId w : s.ring) sum += touch_[w];
+  return sum;
+}
+
 PFace Simplifier::existing(FaceId f) const {
   PFace p;
   p.v = {fv_[3 * f], fv_[3 * f + 1], fv_[3 * f + 2]};
@@ -359,8 +458,9 @@ bool Simplifier::try_step(Search& s, NodeKind kind, std::span<const Index> old,
   for (Index o : old)
     for (int k = 0; k < 3; ++k) old_edges[n_old_edges++] = undirected(p.pool[o].v[k], p.pool[o].v[(k + 1) % 3]);
   auto is_old_edge = [&](std::uint64_t e) {
-    return std::find(old_edges.begin(), old_edges.begin() + static_cast<std::ptrdiff_t>(n_old_edges), e) !=
-           old_edges.begin() + static_cast<std::ptrdiff_t>(n_old_edges);
+    for (std::size_t j = 0; j < n_old_edges; ++j)
+      if (old_edges[j] == e) return true;
+    return false;
   };
   std::array<PFace, 2> nf;
   std::array<Index, 2> known{};
@@ -404,15 +504,8 @@ bool Simplifier::try_step(Search& s, NodeKind kind, std::span<const Index> old,
     // within the plan.
     for (std::size_t i = 0; i < created.size(); ++i) {
       if (glm::dot(nf[i].n, s.axis) < kMinProjectedDot) return false;
-      Search::Known& kn = s.known[known[i]];
-      if (kn.h < 0.0) {
-        kn.h = 0.0;
-        for (Index a : s.anchors) {
-          const double d = mapping_distance(s, p.pool[a], nf[i]);
-          if (d >= 0.0) kn.h = std::max(kn.h, p.pool[a].h + d);
-        }
-      }
-      nf[i].h = kn.h;
+      // A face around v is consumed later in the plan: its bound matters only for the chosen plan.
+      nf[i].h = std::find(nf[i].v.begin(), nf[i].v.end(), s.v) != nf[i].v.end() ? -1.0 : projected_bound(s, known[i]);
     }
   } else {
     // Fallback: each old face goes to the new face its corners are nearest to; distance to a triangle is
@@ -435,7 +528,7 @@ bool Simplifier::try_step(Search& s, NodeKind kind, std::span<const Index> old,
     }
   }
   for (std::size_t i = 0; i < created.size(); ++i)
-    if (!(nf[i].h <= opt_.max_error)) return false;
+    if (nf[i].h > opt_.max_error) return false;  // -1: not computed yet (see finish)
   PStep step;
   step.kind = kind;
   step.n_old = static_cast<std::uint8_t>(old.size());
@@ -449,9 +542,31 @@ bool Simplifier::try_step(Search& s, NodeKind kind, std::span<const Index> old,
   return true;
 }
 
+// The projection-mode bound of a face (cached: it depends on the face only, not on the path to it).
+double Simplifier::projected_bound(Search& s, Index known) const {
+  if (s.known[known].h < 0.0) {
+    Tri2 f;
+    for (int k = 0; k < 3; ++k) f[k] = projected(s, s.known[known].v[k]);
+    double h = 0.0;
+    for (std::size_t a = 0; a < s.anchors.size(); ++a) {
+      const double d = overlap_height_gap(s.anchors2[a], f);
+      if (d >= 0.0) h = std::max(h, s.cur.pool[s.anchors[a]].h + d);
+    }
+    s.known[known].h = h;
+  }
+  return s.known[known].h;
+}
+
 Simplifier::Search::Known& Simplifier::know(Search& s, const std::array<VertexId, 3>& t) const {
-  for (auto& k : s.known)
-    if (k.v[0] == t[0] && k.v[1] == t[1] && k.v[2] == t[2]) return k;
+  std::size_t key = 0;
+  for (int i = 0; i < 3; ++i) {
+    std::size_t l = 0;
+    while (l < s.region.size() && s.region[l] != t[i]) ++l;
+    if (l == s.region.size()) s.region.push_back(t[i]);
+    key = key * 16 + l;
+  }
+  if (s.slot[key] >= 0) return s.known[static_cast<std::size_t>(s.slot[key])];
+  s.slot[key] = static_cast<std::int16_t>(s.known.size());
   Search::Known k{t, face_shape(pos_[t[0]], pos_[t[1]], pos_[t[2]]), triples_.count(triple(t[0], t[1], t[2])) != 0,
                   0, -1.0};
   for (int i = 0; i < 3; ++i) {
@@ -477,15 +592,18 @@ void Simplifier::search_ring(Search& s) {
   struct Ear {
     double h;
     std::size_t i;
+    PStep step;
+    std::array<PFace, 2> faces;
   };
   std::array<Ear, 16> ears{};
   std::size_t n_ears = 0;
   const std::size_t pool_mark = s.cur.pool.size(), step_mark = s.cur.steps.size();
-  for (std::size_t i = first; i < last && n_ears < ears.size(); ++i) {
+  for (std::size_t i = first; i < last; ++i) {
     const std::size_t pi = (i + d - 1) % d, ni = (i + 1) % d;
     const std::array<Index, 2> old{s.ringf[pi], s.ringf[i]};
     const std::array<std::array<VertexId, 3>, 2> created{{{v, s.ring[pi], s.ring[ni]}, {s.ring[pi], s.ring[i], s.ring[ni]}}};
-    if (try_step(s, NodeKind::kSwap, old, created)) ears[n_ears++] = {s.cur.pool.back().h, i};
+    if (try_step(s, NodeKind::kSwap, old, created))
+      ears[n_ears++] = {s.cur.pool.back().h, i, s.cur.steps.back(), {s.cur.pool[pool_mark], s.cur.pool[pool_mark + 1]}};
     s.cur.pool.resize(pool_mark);
     s.cur.steps.resize(step_mark);
   }
@@ -494,17 +612,16 @@ void Simplifier::search_ring(Search& s) {
   for (std::size_t e = 0; e < n_ears; ++e) {
     const std::size_t i = ears[e].i;
     if (ears[e].h > s.best.cost + tol_) break;  // the ear stays: its bound is a lower bound of the cost
-    const std::size_t pi = (i + d - 1) % d, ni = (i + 1) % d;
-    const std::array<Index, 2> old{s.ringf[pi], s.ringf[i]};
-    const std::array<std::array<VertexId, 3>, 2> created{{{v, s.ring[pi], s.ring[ni]}, {s.ring[pi], s.ring[i], s.ring[ni]}}};
-    if (!try_step(s, NodeKind::kSwap, old, created)) continue;  // legal a moment ago; kept for safety
-    const Index f1 = s.cur.steps.back().created[0], f2 = s.cur.steps.back().created[1];
+    const std::size_t pi = (i + d - 1) % d;
+    s.cur.pool.push_back(ears[e].faces[0]);  // at pool_mark and pool_mark + 1, as when it was tried
+    s.cur.pool.push_back(ears[e].faces[1]);
+    s.cur.steps.push_back(ears[e].step);
     const auto ring = s.ring;
     const auto ringf = s.ringf;
-    s.ringf[pi] = f1;
-    s.ring.erase(s.ring.begin() + static_cast<std::ptrdiff_t>(i));
-    s.ringf.erase(s.ringf.begin() + static_cast<std::ptrdiff_t>(i));
-    s.ears.push_back(f2);
+    s.ringf[pi] = static_cast<Index>(pool_mark);
+    s.ring.erase_at(i);
+    s.ringf.erase_at(i);
+    s.ears.push_back(static_cast<Index>(pool_mark + 1));
     ++s.cur.swaps;
     search_ring(s);
     --s.cur.swaps;
@@ -514,6 +631,69 @@ void Simplifier::search_ring(Search& s) {
     s.cur.pool.resize(pool_mark);
     s.cur.steps.resize(step_mark);
   }
+}
+
+// Dihedral criterion across every edge of the plan's final faces `fin` (pool indices): between two final
+// faces, and on the cluster's ring against the unchanged face outside (at least what was there before).
+bool Simplifier::dihedral_ok(const std::vector<PFace>& pool, std::span<const Index> fin) const {
+  for (Index f : fin) {
+    const PFace& F = pool[f];
+    for (int k = 0; k < 3; ++k) {
+      const VertexId a = F.v[k], b = F.v[(k + 1) % 3];
+      bool inner = false;
+      for (Index g : fin) {
+        const PFace& G = pool[g];
+        for (int kk = 0; kk < 3; ++kk)
+          if (G.v[kk] == b && G.v[(kk + 1) % 3] == a) {
+            inner = true;
+            if (glm::dot(F.n, G.n) < opt_.min_dihedral_cos) return false;
+          }
+      }
+      if (inner) continue;
+      const auto out = he_.find(dkey(b, a));
+      const auto own = he_.find(dkey(a, b));
+      if (out == he_.end() || own == he_.end()) continue;  // mesh border (or the new border edge)
+      const DVec no = face_shape(pos_[fv_[3 * out->second]], pos_[fv_[3 * out->second + 1]],
+                                 pos_[fv_[3 * out->second + 2]]).n;
+      const DVec nr = face_shape(pos_[fv_[3 * own->second]], pos_[fv_[3 * own->second + 1]],
+                                 pos_[fv_[3 * own->second + 2]]).n;
+      if (glm::dot(F.n, no) < std::min(opt_.min_dihedral_cos, glm::dot(nr, no))) return false;
+    }
+  }
+  return true;
+}
+
+// Re-checks a plan made earlier in this level against the current mesh: its faces are untouched and not
+// frozen, and what it creates is still legal (no existing edge or triple, border rule, dihedral criterion
+// against the faces now around it). Geometry of the plan itself cannot have changed.
+bool Simplifier::still_valid(const Plan& p, std::uint16_t level) const {
+  auto undirected = [](VertexId a, VertexId b) { return a < b ? dkey(a, b) : dkey(b, a); };
+  std::vector<std::uint64_t> anchor_edges;
+  for (const PFace& f : p.pool)
+    if (f.id != kInvalid) {
+      if (!alive_[f.id] || frozen_[f.id] == level) return false;
+      for (int k = 0; k < 3; ++k) anchor_edges.push_back(undirected(f.v[k], f.v[(k + 1) % 3]));
+    }
+  std::vector<Index> fin;
+  for (const PStep& st : p.steps) {
+    for (int i = 0; i < st.n_new; ++i) {
+      const PFace& f = p.pool[st.created[i]];
+      if (triples_.count(triple(f.v[0], f.v[1], f.v[2]))) return false;
+      for (int k = 0; k < 3; ++k) {
+        const VertexId a = f.v[k], b = f.v[(k + 1) % 3];
+        if (std::find(anchor_edges.begin(), anchor_edges.end(), undirected(a, b)) != anchor_edges.end()) continue;
+        if (edge_exists(a, b)) return false;
+        bool shared = false;
+        for (int j = 0; j < st.n_new; ++j)
+          for (int kk = 0; kk < 3; ++kk)
+            if (j != i && p.pool[st.created[j]].v[kk] == b && p.pool[st.created[j]].v[(kk + 1) % 3] == a) shared = true;
+        if (!shared && directed_.count(dkey(b, a))) return false;
+      }
+      fin.push_back(st.created[i]);
+    }
+    for (int i = 0; i < st.n_old; ++i) fin.erase(std::remove(fin.begin(), fin.end(), st.old[i]), fin.end());
+  }
+  return dihedral_ok(p.pool, fin);
 }
 
 // The last step (4 -> 2 by either diagonal, or the border 2 -> 1), then the plan-wide dihedral checks.
@@ -531,31 +711,14 @@ void Simplifier::finish(Search& s) {
     c.cost = cost;
     c.quality = quality;
     if (s.best.valid() && !better(c, s.best)) return;
-    // Dihedral criterion across every edge of the final faces.
-    for (Index f : fin) {
-      const PFace& F = c.pool[f];
-      for (int k = 0; k < 3; ++k) {
-        const VertexId a = F.v[k], b = F.v[(k + 1) % 3];
-        bool inner = false;
-        for (Index g : fin) {
-          const PFace& G = c.pool[g];
-          for (int kk = 0; kk < 3; ++kk)
-            if (G.v[kk] == b && G.v[(kk + 1) % 3] == a) {
-              inner = true;
-              if (glm::dot(F.n, G.n) < opt_.min_dihedral_cos) return;
-            }
-        }
-        if (inner) continue;
-        const auto out = he_.find(dkey(b, a));
-        const auto own = he_.find(dkey(a, b));
-        if (out == he_.end() || own == he_.end()) continue;  // mesh border (or the new border edge)
-        const DVec no = face_shape(pos_[fv_[3 * out->second]], pos_[fv_[3 * out->second + 1]],
-                                   pos_[fv_[3 * out->second + 2]]).n;
-        const DVec nr = face_shape(pos_[fv_[3 * own->second]], pos_[fv_[3 * own->second + 1]],
-                                   pos_[fv_[3 * own->second + 2]]).n;
-        if (glm::dot(F.n, no) < std::min(opt_.min_dihedral_cos, glm::dot(nr, no))) return;
+    if (!dihedral_ok(c.pool, fin)) return;
+    // Bounds of the faces around v that the plan consumes again (left open by try_step; they depend on the
+    // face only, so filling them in the shared prefix of the search is harmless).
+    for (PFace& f : c.pool)
+      if (f.h < 0.0) {
+        f.h = projected_bound(s, static_cast<Index>(&know(s, f.v) - s.known.data()));
+        if (f.h > opt_.max_error) return;
       }
-    }
     s.best = c;
   };
   const std::size_t pool_mark = s.cur.pool.size(), step_mark = s.cur.steps.size();
@@ -600,6 +763,12 @@ bool Simplifier::setup_projection(Search& s, std::size_t star_faces) const {
     for (VertexId w : s.cur.pool[a].v)
       if (std::none_of(s.projected.begin(), s.projected.end(), [&](const auto& q) { return q.first == w; }))
         s.projected.push_back({w, DVec(glm::dot(pos_[w], s.e1), glm::dot(pos_[w], s.e2), glm::dot(pos_[w], axis))});
+  s.anchors2.clear();
+  for (Index a : s.anchors) {
+    Tri2 t;
+    for (int k = 0; k < 3; ++k) t[k] = projected(s, s.cur.pool[a].v[k]);
+    s.anchors2.push_back(t);
+  }
   double turn = 0.0;
   for (std::size_t i = 0; i < star_faces; ++i) {
     const auto& v = s.cur.pool[s.anchors[i]].v;
@@ -611,66 +780,6 @@ bool Simplifier::setup_projection(Search& s, std::size_t star_faces) const {
   }
   s.proj = std::abs(turn - 2.0 * std::numbers::pi) < 1e-3;
   return s.proj;
-}
-
-// Largest distance along the axis between `anchor` and `f` over the overlap of their projections (the
-// vertices of the clipped polygon suffice: the difference of two linear height functions is affine there).
-// -1 when the projections do not overlap.
-double Simplifier::mapping_distance(const Search& s, const PFace& anchor, const PFace& f) const {
-  struct P2 {
-    double x, y;
-  };
-  auto coords = [&](VertexId v) -> const DVec& {
-    for (const auto& [w, c] : s.projected)
-      if (w == v) return c;
-    throw std::logic_error("simplify4k: vertex outside the projected region");
-  };
-  auto to2 = [&](VertexId v) {
-    const DVec& c = coords(v);
-    return P2{c.x, c.y};
-  };
-  auto cross = [](const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); };
-  const std::array<P2, 3> A{to2(anchor.v[0]), to2(anchor.v[1]), to2(anchor.v[2])};
-  const std::array<P2, 3> F{to2(f.v[0]), to2(f.v[1]), to2(f.v[2])};
-  // Separated (touching at most): the overlap has no area, and its points are also vertices of the
-  // overlaps with the neighbouring faces, so it adds nothing.
-  for (int e = 0; e < 3; ++e) {
-    if (cross(A[e], A[(e + 1) % 3], F[0]) <= 0.0 && cross(A[e], A[(e + 1) % 3], F[1]) <= 0.0 &&
-        cross(A[e], A[(e + 1) % 3], F[2]) <= 0.0)
-      return -1.0;
-    if (cross(F[e], F[(e + 1) % 3], A[0]) <= 0.0 && cross(F[e], F[(e + 1) % 3], A[1]) <= 0.0 &&
-        cross(F[e], F[(e + 1) % 3], A[2]) <= 0.0)
-      return -1.0;
-  }
-  std::array<P2, 9> poly{}, next{};
-  std::size_t n = 3;
-  std::copy(F.begin(), F.end(), poly.begin());
-  for (int e = 0; e < 3 && n > 0; ++e) {  // Sutherland-Hodgman against the anchor's edges
-    const P2& a = A[e];
-    const P2& b = A[(e + 1) % 3];
-    std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const P2& p = poly[i];
-      const P2& q = poly[(i + 1) % n];
-      const double sp = cross(a, b, p), sq = cross(a, b, q);
-      if (sp >= 0.0 && m < next.size()) next[m++] = p;
-      if (((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0)) && m < next.size()) {
-        const double t = sp / (sp - sq);
-        next[m++] = {p.x + t * (q.x - p.x), p.y + t * (q.y - p.y)};
-      }
-    }
-    poly = next;
-    n = m;
-  }
-  if (n == 0) return -1.0;
-  auto height = [&](const std::array<P2, 3>& T, const PFace& face, const P2& q) {
-    const double det = cross(T[0], T[1], T[2]);
-    const double l0 = cross(q, T[1], T[2]) / det, l1 = cross(T[0], q, T[2]) / det, l2 = 1.0 - l0 - l1;
-    return l0 * coords(face.v[0]).z + l1 * coords(face.v[1]).z + l2 * coords(face.v[2]).z;
-  };
-  double worst = 0.0;
-  for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, std::abs(height(A, anchor, poly[i]) - height(F, f, poly[i])));
-  return worst;
 }
 
 // The best legal way to remove v at this level, or an invalid plan. Plans in projection mode are preferred
@@ -687,11 +796,16 @@ Plan Simplifier::best_plan(VertexId v, std::uint16_t level) {
     return {};
   }
   for (FaceId f : star.faces)
-    if (frozen_[f] == level) return {};  // a cluster collapsed at this level: its faces wait a level
+    if (frozen_[f] == level) {  // a cluster collapsed at this level: its faces wait a level
+      Plan blocked;
+      blocked.blocked = true;
+      return blocked;
+    }
   Search base;
+  base.slot.fill(-1);
   base.v = v;
   base.closed = !star.border;
-  base.ring = star.ring;
+  base.ring.assign(star.ring.begin(), star.ring.end());
   double worst_q = 1.0;
   for (FaceId f : star.faces) {
     base.ringf.push_back(static_cast<Index>(base.cur.pool.size()));
@@ -720,7 +834,11 @@ Plan Simplifier::best_plan(VertexId v, std::uint16_t level) {
   for (std::size_t i = 0; i < 3; ++i) {
     const VertexId a = star.ring[i], b = star.ring[(i + 1) % 3], c = star.ring[(i + 2) % 3];
     const auto it = he_.find(dkey(b, a));
-    if (it == he_.end() || frozen_[it->second] == level) continue;
+    if (it == he_.end()) continue;
+    if (frozen_[it->second] == level) {
+      best.blocked = true;
+      continue;
+    }
     const PFace outer = existing(it->second);
     VertexId x = kInvalid;
     for (VertexId w : outer.v)
@@ -742,7 +860,11 @@ Plan Simplifier::best_plan(VertexId v, std::uint16_t level) {
       s.cur.swaps = 1;
       finish(s);
       if (!s.best.valid()) continue;
-      if (!best.valid() || better(s.best, best)) best = std::move(s.best);
+      if (!best.valid() || better(s.best, best)) {
+        const bool blocked = best.blocked;
+        best = std::move(s.best);
+        best.blocked = blocked;
+      }
       break;  // projection mode found a plan: no fallback for this edge
     }
   }
@@ -752,7 +874,10 @@ Plan Simplifier::best_plan(VertexId v, std::uint16_t level) {
 void Simplifier::remove_face(FaceId f) {
   if (!alive_[f]) throw std::logic_error("simplify4k: removing a dead face");
   alive_[f] = 0;
-  for (int k = 0; k < 3; ++k) he_.erase(dkey(fv_[3 * f + k], fv_[3 * f + (k + 1) % 3]));
+  for (int k = 0; k < 3; ++k) {
+    he_.erase(dkey(fv_[3 * f + k], fv_[3 * f + (k + 1) % 3]));
+    ++touch_[fv_[3 * f + k]];
+  }
   --num_alive_;
 }
 
@@ -769,6 +894,7 @@ FaceId Simplifier::add_face(const std::array<VertexId, 3>& v, double h, std::uin
       throw std::logic_error("simplify4k: a plan created a non-manifold edge");
     directed_.insert(dkey(v[k], v[(k + 1) % 3]));
     vface_[v[k]] = f;
+    ++touch_[v[k]];
   }
   triples_.insert(triple(v[0], v[1], v[2]));
   ++num_alive_;
@@ -860,28 +986,38 @@ Simplify4kResult Simplifier::run() {
   levels[0].vertices = used_vertices();
   std::vector<TriMesh> meshes;
   if (opt_.keep_level_meshes) meshes.push_back(snapshot());
-  // Greedy cover by increasing error bound. A plan is re-made when popped (the mesh may have changed)
-  // and pushed back if it got worse; the neighbours of a removed vertex are re-planned.
+  // Greedy cover, best first (see the header). The key is (blocks, flatness): blocks starts as a lower
+  // bound computed from the star alone (a collapse blocks at least the free ring vertices it keeps);
+  // flatness is a cheap stand-in for the plan's error bound, the star's bound plus v's distance to the mean
+  // plane of its ring. A popped candidate gets its real plan and is executed if it still comes first, else
+  // it goes back with its real key and the plan is kept (re-checked by still_valid when popped again).
+  // Candidates blocked by a neighbour before they are popped never need a plan search.
   struct Candidate {
     int blocks;
     double cost;
-    int swaps;
     VertexId v;
     std::uint32_t stamp;
+    bool exact;
   };
   const bool cover = opt_.prefer_cover;
   auto after = [cover](const Candidate& a, const Candidate& b) {
     if (cover && a.blocks != b.blocks) return a.blocks > b.blocks;
     if (a.cost != b.cost) return a.cost > b.cost;
-    if (a.swaps != b.swaps) return a.swaps > b.swaps;
+    if (a.exact != b.exact) return b.exact;
     return a.v > b.v;
   };
   std::vector<std::uint32_t> stamp(pos_.size(), 0);
+  constexpr std::uint64_t kNoSignature = std::numeric_limits<std::uint64_t>::max();
+  std::vector<std::uint64_t> no_plan(pos_.size(), kNoSignature);
+  std::unordered_map<VertexId, std::pair<std::uint32_t, Plan>> kept;
   std::vector<VertexId> touched;
+  Star star;
   for (int lv = 1; lv <= opt_.max_levels; ++lv) {
     if (opt_.target_faces != 0 && num_alive_ <= opt_.target_faces) break;
     const auto level = static_cast<std::uint16_t>(lv);
     std::priority_queue<Candidate, std::vector<Candidate>, decltype(after)> queue(after);
+    kept.clear();
+    auto free_here = [&](VertexId w) { return vstate_[w] == kFree && blocked_[w] != level; };
     auto blocks = [&](const Plan& p) {
       int n = 0;
       const PStep& last = p.steps.back();
@@ -891,17 +1027,47 @@ Simplify4kResult Simplifier::run() {
         for (VertexId w : p.pool[last.created[i]].v)
           if (std::find(seen.begin(), seen.begin() + static_cast<std::ptrdiff_t>(ns), w) == seen.begin() + static_cast<std::ptrdiff_t>(ns)) {
             seen[ns++] = w;
-            if (vstate_[w] == kFree && blocked_[w] != level) ++n;
+            if (free_here(w)) ++n;
           }
       return n;
     };
-    auto push = [&](VertexId v) {
+    auto push_estimate = [&](VertexId v) {
       ++stamp[v];
-      const Plan p = best_plan(v, level);
-      if (p.valid()) queue.push({blocks(p), p.cost, p.swaps, v, stamp[v]});
+      if (vstate_[v] != kFree) return;
+      if (!collect_star(v, star, static_cast<std::size_t>(std::max(opt_.max_swap_degree, opt_.max_border_faces))))
+        return;
+      if (no_plan[v] != kNoSignature) {  // nothing changed since the search found no plan: skip it
+        std::uint64_t sig = touch_[v];
+        for (VertexId w : star.ring) sig += touch_[w];
+        if (sig == no_plan[v]) return;
+      }
+      int unblocked = 0;
+      double cost = 0.0;
+      DVec normal(0.0), centre(0.0);
+      for (VertexId w : star.ring) {
+        unblocked += free_here(w);
+        centre += pos_[w];
+      }
+      centre /= static_cast<double>(star.ring.size());
+      for (FaceId f : star.faces) {
+        if (frozen_[f] == level) return;
+        cost = std::max(cost, h_[f]);
+        const DVec& a = pos_[fv_[3 * f]];
+        normal += glm::cross(pos_[fv_[3 * f + 1]] - a, pos_[fv_[3 * f + 2]] - a);
+      }
+      const double len = glm::length(normal);
+      cost += len > 0.0 ? std::abs(glm::dot(pos_[v] - centre, normal)) / len : glm::length(pos_[v] - centre);
+      if (star.border) {  // the border moves: v's distance to the new border edge (w0, wk)
+        const DVec a = pos_[star.ring.front()], e = pos_[star.ring.back()] - a;
+        const double l2 = glm::dot(e, e);
+        const double t = l2 > 0.0 ? std::clamp(glm::dot(pos_[v] - a, e) / l2, 0.0, 1.0) : 0.0;
+        cost += glm::length(pos_[v] - (a + e * t));
+      }
+      const int kept_vertices = star.border ? 3 : 4;
+      const int lb = std::max(0, unblocked - std::max(0, static_cast<int>(star.ring.size()) - kept_vertices));
+      queue.push({lb, cost, v, stamp[v], false});
     };
-    for (VertexId v = 0; v < pos_.size(); ++v)
-      if (vstate_[v] == kFree) push(v);
+    for (VertexId v = 0; v < pos_.size(); ++v) push_estimate(v);
     Simplify4kLevel stats;
     std::size_t done = 0;
     while (!queue.empty()) {
@@ -909,11 +1075,24 @@ Simplify4kResult Simplifier::run() {
       const Candidate c = queue.top();
       queue.pop();
       if (c.stamp != stamp[c.v]) continue;
-      const Plan p = best_plan(c.v, level);
-      if (!p.valid()) continue;
-      const int b = blocks(p);
-      if (p.cost > c.cost + tol_ || (cover && b > c.blocks)) {
-        queue.push({b, p.cost, p.swaps, c.v, ++stamp[c.v]});
+      Plan p;
+      if (c.exact) {
+        auto it = kept.find(c.v);
+        if (it != kept.end() && it->second.first == c.stamp && still_valid(it->second.second, level))
+          p = std::move(it->second.second);
+        if (it != kept.end()) kept.erase(it);
+      }
+      if (!p.valid()) {
+        p = best_plan(c.v, level);
+        if (!p.valid()) {
+          if (!p.blocked) no_plan[c.v] = signature(c.v);
+          continue;
+        }
+      }
+      const Candidate real{blocks(p), c.cost, c.v, c.stamp, true};
+      if (!queue.empty() && after(real, queue.top())) {  // no longer first: wait with the real key
+        queue.push(real);
+        kept[c.v] = {c.stamp, std::move(p)};
         continue;
       }
       touched.clear();
@@ -925,8 +1104,7 @@ Simplify4kResult Simplifier::run() {
       ++done;
       std::sort(touched.begin(), touched.end());
       touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-      for (VertexId w : touched)
-        if (vstate_[w] == kFree) push(w);
+      for (VertexId w : touched) push_estimate(w);
     }
     if (done == 0) break;
     stats.faces = num_alive_;
