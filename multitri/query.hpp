@@ -245,9 +245,11 @@ QueryStats update(F& front, const Query& q) {
   while (!work.empty()) {
     const Index e = work.back();
     work.pop_back();
-    if (!front.is_coarsenable(e)) continue;
+    // Ask the criterion first: most candidates are still wanted, and is_coarsenable can cost a 1-ring walk
+    // (SrMesh checks the Kim-Lee degenerate case there).
     ++stats.evaluated;
     if (q.wants(front.element_bound(e))) continue;
+    if (!front.is_coarsenable(e)) continue;
     front.coarsen_one(e);
     ++stats.coarsened;
     front.for_each_parent_candidate(e, [&](Index p) { work.push_back(p); });

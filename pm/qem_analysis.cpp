@@ -525,6 +525,7 @@ VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& op
   if (options.max_depth < 1 || options.max_depth > 62) throw InvalidInput("QemOptions::max_depth must be in [1, 62]");
   ManifoldInput in = make_manifold_input(mesh, options.non_manifold);
   QemStats local;
+  if (stats) *stats = {};
   Analysis analysis(std::move(in), options);
   return analysis.run(stats ? *stats : local);
 }
