@@ -23,6 +23,10 @@
 /// (one per original face: three corners and the three faces across its edges) and one incident face per
 /// active vertex, so every operation walks only 1-rings.
 ///
+/// Query API note: update() may keep a few sibling pairs finer than extract() would, because a Kim-Lee ecol
+/// postponed by the degenerate case (section 4.4) is not retried until its neighbourhood changes; the answer
+/// is still a fixpoint of the query (tests/pm/sr_query_test.cpp).
+///
 /// Invariants (validate()): every active face's corners are active; adjacency is symmetric and across
 /// opposite directed edges; every active vertex has one fan of faces (disc or half-disc); node states are
 /// consistent (an active node's ancestors are refined, its descendants inactive). The dual-piece oracle
