@@ -11,17 +11,22 @@ namespace {
 
 // Angle between the cone axis and the direction from the eye to the sphere, widened by the cone's and the
 // sphere's angular radii: the region is entirely back-facing when
-// angle(axis, c - eye) + alpha + beta < 90 degrees (every normal points away from every viewing ray),
-// with alpha the cone half-angle and beta = asin(r / |c - eye|) (Shirman and Abi-Ezzi 1993; Hoppe 1997).
+// theta + alpha + beta < 90 degrees, theta = angle(axis, c - eye) (every normal points away from every
+// viewing ray), with alpha the cone half-angle and beta = asin(r / |c - eye|) (Shirman and Abi-Ezzi 1993;
+// Hoppe 1997). Without trigonometry (this runs for every candidate of every frame): with
+// gamma = 90 - (alpha + beta), the test is alpha + beta < 90 (cos(alpha + beta) > 0) and
+// theta < gamma, i.e. cos(theta) > cos(gamma) = sin(alpha + beta) = sin(alpha) cos(beta) + cos(alpha) sin(beta).
 bool entirely_facing(const ElementBound& b, const glm::vec3& eye, float sign) {
-  if (b.cone.is_full()) return false;
+  const float ca = b.cone.cos_half_angle;
+  if (b.cone.is_full() || !(ca > 0.0f)) return false;  // alpha >= 90 degrees
   const glm::vec3 d = b.center - eye;
   const float dist = glm::length(d);
   if (dist <= b.radius) return false;
-  const float beta = std::asin(std::min(1.0f, b.radius / dist));
-  const float alpha = std::acos(std::clamp(b.cone.cos_half_angle, -1.0f, 1.0f));
-  const float cos_between = std::clamp(sign * glm::dot(b.cone.axis, d) / dist, -1.0f, 1.0f);
-  return std::acos(cos_between) + alpha + beta < 1.5707963f;
+  const float sb = std::min(1.0f, b.radius / dist);
+  const float cb = std::sqrt(std::max(0.0f, 1.0f - sb * sb));
+  const float sa = std::sqrt(std::max(0.0f, 1.0f - std::min(1.0f, ca) * std::min(1.0f, ca)));
+  if (!(ca * cb - sa * sb > 0.0f)) return false;  // alpha + beta >= 90 degrees
+  return sign * glm::dot(b.cone.axis, d) / dist > sa * cb + std::min(1.0f, ca) * sb;
 }
 
 }  // namespace
