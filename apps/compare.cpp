@@ -27,6 +27,7 @@
 #include "multitri/errors.hpp"
 #include "multitri/file_util.hpp"
 #include "multitri/heightfield.hpp"
+#include "multitri/shapes.hpp"
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
@@ -259,34 +260,9 @@ Camera top_down_camera(const Box3& box) {
   return cam;
 }
 
-// Generated 3D stand-ins for missing model files (as in tests/pm/pm_fixtures.hpp).
-TriMesh make_icosphere(int levels) {
-  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
-  TriMesh m;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-               3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
-  for (auto& p : m.positions) p = glm::normalize(p);
-  for (int l = 0; l < levels; ++l) {
-    std::unordered_map<std::uint64_t, Index> mid;
-    auto midpoint = [&](Index a, Index b) {
-      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-      const auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      m.positions.push_back(glm::normalize(m.positions[a] + m.positions[b]));
-      const Index v = static_cast<Index>(m.positions.size() - 1);
-      mid.emplace(key, v);
-      return v;
-    };
-    std::vector<Index> next;
-    for (std::size_t f = 0; f < m.num_faces(); ++f) {
-      const Index a = m.indices[3 * f], b = m.indices[3 * f + 1], c = m.indices[3 * f + 2];
-      const Index ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-      next.insert(next.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
-    }
-    m.indices = std::move(next);
-  }
+// Generated 3D stand-in for missing model files: a bumpy icosphere.
+TriMesh make_bumpy_icosphere(int levels) {
+  TriMesh m = varmesh::make_icosphere(levels);
   // A few bumps so the surface is not uniform (the analysis then has an order to follow).
   for (auto& p : m.positions) p *= 1.0f + 0.12f * std::sin(5.0f * p.x) * std::cos(4.0f * p.y) * std::sin(3.0f * p.z + 1.0f);
   return m;
@@ -492,7 +468,7 @@ CaseInput model_case(const Options& o, const std::string& name) {
       c.mesh = o.quick ? make_torus(32, 16, 1.0f, 0.35f) : make_torus(120, 60, 1.0f, 0.35f);
       c.source = "generated torus";
     } else {
-      c.mesh = make_icosphere(o.quick ? 3 : (name == "bunny" ? 5 : 6));
+      c.mesh = make_bumpy_icosphere(o.quick ? 3 : (name == "bunny" ? 5 : 6));
       c.source = "generated bumpy icosphere";
     }
   } else {

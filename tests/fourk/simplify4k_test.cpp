@@ -2,6 +2,7 @@
 // increasing 4-k Multi-Triangulation. Generated meshes (icosphere, torus grids, open grids, two components)
 // run anywhere; the cow of Figure 21 runs when ../shared/data is present.
 #include "fourk/simplify4k.hpp"
+#include "multitri/shapes.hpp"
 
 #include <algorithm>
 #include <array>
@@ -63,35 +64,7 @@ std::vector<Key> front_keys(const MtFront& front) {
 
 // ---- generated meshes ----
 
-TriMesh icosphere(int subdivisions) {
-  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
-  TriMesh m;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-               3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
-  for (auto& p : m.positions) p = glm::normalize(p);
-  for (int s = 0; s < subdivisions; ++s) {
-    std::unordered_map<std::uint64_t, Index> mid;
-    auto midpoint = [&](Index a, Index b) {
-      const std::uint64_t k = a < b ? dkey(a, b) : dkey(b, a);
-      const auto it = mid.find(k);
-      if (it != mid.end()) return it->second;
-      m.positions.push_back(glm::normalize(m.positions[a] + m.positions[b]));
-      const auto id = static_cast<Index>(m.positions.size() - 1);
-      mid.emplace(k, id);
-      return id;
-    };
-    std::vector<Index> out;
-    for (std::size_t f = 0; f < m.num_faces(); ++f) {
-      const Index a = m.corner(f, 0), b = m.corner(f, 1), c = m.corner(f, 2);
-      const Index ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-      out.insert(out.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
-    }
-    m.indices = std::move(out);
-  }
-  return m;
-}
+TriMesh icosphere(int subdivisions) { return make_icosphere(subdivisions); }
 
 // nu x nv torus grid; each quad split by one diagonal: alternating (a 4-8 pattern, half the vertices of
 // degree 4) or always the same one (every vertex of degree 6).
