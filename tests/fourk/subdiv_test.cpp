@@ -1,0 +1,342 @@
+// Primal subdivision as binary 4-8 steps (fourk/subdiv.hpp): box-spline masks on periodic grids, tables
+// against the fast path, topology invariants, the adaptive Mt against uniform subdivision, bad input.
+#include "fourk/subdiv.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+
+#include "fourk/poly_mesh.hpp"
+#include "multitri/errors.hpp"
+#include "multitri/mt_front.hpp"
+#include "multitri/query.hpp"
+
+namespace varmesh {
+namespace {
+
+// Dense 2D polynomial in (z1, z2) with an exponent offset, for box-spline symbols.
+struct Poly2 {
+  int lo1 = 0, lo2 = 0;
+  std::vector<std::vector<double>> c{{1.0}};  // c[i][j] = coefficient of z1^(lo1+i) z2^(lo2+j)
+  Poly2 times_binomial(int d1, int d2) const {  // * (1 + z1^d1 z2^d2) / 2
+    Poly2 r;
+    const int n1 = static_cast<int>(c.size()), n2 = static_cast<int>(c[0].size());
+    r.lo1 = std::min(lo1, lo1 + d1);
+    r.lo2 = std::min(lo2, lo2 + d2);
+    const int hi1 = std::max(lo1 + n1 - 1, lo1 + d1 + n1 - 1), hi2 = std::max(lo2 + n2 - 1, lo2 + d2 + n2 - 1);
+    r.c.assign(hi1 - r.lo1 + 1, std::vector<double>(hi2 - r.lo2 + 1, 0.0));
+    for (int i = 0; i < n1; ++i)
+      for (int j = 0; j < n2; ++j) {
+        r.c[lo1 + i - r.lo1][lo2 + j - r.lo2] += 0.5 * c[i][j];
+        r.c[lo1 + d1 + i - r.lo1][lo2 + d2 + j - r.lo2] += 0.5 * c[i][j];
+      }
+    return r;
+  }
+  double at(int e1, int e2) const {
+    const int i = e1 - lo1, j = e2 - lo2;
+    if (i < 0 || j < 0 || i >= static_cast<int>(c.size()) || j >= static_cast<int>(c[0].size())) return 0.0;
+    return 4.0 * c[i][j];  // dyadic masks sum to 4
+  }
+};
+
+// A periodic n x n grid (torus topology) with random values in the three coordinates.
+PolyMesh random_periodic_grid(int n, unsigned seed) {
+  PolyMesh m = make_quad_torus(n, n);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (auto& p : m.positions) p = {u(rng), u(rng), u(rng)};
+  return m;
+}
+
+// Fine-lattice coordinates (in [0, 2n)^2) of every vertex after one quadrisection of the periodic grid.
+std::vector<std::array<int, 2>> fine_coordinates(const PolyMesh& grid, int n) {
+  const SubdivTopology t = make_subdiv_topology(grid);
+  auto coord = [n](Index v) { return std::array<int, 2>{static_cast<int>(v) / n, static_cast<int>(v) % n}; };
+  auto wrap = [n](int d) { return d > 1 ? d - n : (d < -1 ? d + n : d); };
+  std::vector<std::array<int, 2>> out(t.num_vertices + t.num_faces + t.num_edges());
+  auto fine = [&](std::array<int, 2> c0, int d0, int d1) {
+    const int m = 2 * n;
+    return std::array<int, 2>{((2 * c0[0] + d0) % m + m) % m, ((2 * c0[1] + d1) % m + m) % m};
+  };
+  for (Index v = 0; v < t.num_vertices; ++v) out[v] = fine(coord(v), 0, 0);
+  for (Index f = 0; f < t.num_faces; ++f) {
+    const auto c0 = coord(t.face_verts[4 * f]);
+    int s0 = 0, s1 = 0;
+    for (int i = 0; i < 4; ++i) {
+      const auto c = coord(t.face_verts[4 * f + i]);
+      s0 += wrap(c[0] - c0[0]);
+      s1 += wrap(c[1] - c0[1]);
+    }
+    out[t.num_vertices + f] = fine(c0, s0 / 2, s1 / 2);
+  }
+  for (std::size_t e = 0; e < t.num_edges(); ++e) {
+    const auto a = coord(t.edge_verts[2 * e]), b = coord(t.edge_verts[2 * e + 1]);
+    out[t.num_vertices + t.num_faces + e] = fine(a, wrap(b[0] - a[0]), wrap(b[1] - a[1]));
+  }
+  return out;
+}
+
+// Two binary steps of `scheme` on a periodic grid against the dyadic mask of `symbol`.
+void expect_dyadic_mask(SubdivScheme scheme, const Poly2& symbol, int centre1, int centre2) {
+  const int n = 12;
+  const PolyMesh grid = random_periodic_grid(n, 7);
+  const SubdivMesh fine = subdivide(grid, scheme, 2);
+  const auto at = fine_coordinates(grid, n);
+  ASSERT_EQ(at.size(), fine.positions.size());
+  double worst = 0.0;
+  for (std::size_t v = 0; v < at.size(); ++v) {
+    glm::dvec3 want(0.0);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        // p'_x = sum_j a_{x - 2j} p_j over the periodic lattice (nearest representative of x - 2j).
+        int d0 = at[v][0] - 2 * i, d1 = at[v][1] - 2 * j;
+        d0 = ((d0 % (2 * n)) + 3 * n) % (2 * n) - n;
+        d1 = ((d1 % (2 * n)) + 3 * n) % (2 * n) - n;
+        const double w = symbol.at(d0 + centre1, d1 + centre2);
+        if (w != 0.0) want += w * grid.positions[static_cast<std::size_t>(i * n + j)];
+      }
+    worst = std::max(worst, glm::length(want - fine.positions[v]));
+  }
+  EXPECT_LT(worst, 1e-12) << to_string(scheme);
+}
+
+TEST(Subdiv, FourEightTwoStepsAreTheC4BoxSplineMask) {
+  // Directions e1, e2, e1 + e2, e1 - e2, each twice (Velho-Zorin 2001).
+  Poly2 s;
+  for (int r = 0; r < 2; ++r) s = s.times_binomial(1, 0).times_binomial(0, 1).times_binomial(1, 1).times_binomial(1, -1);
+  expect_dyadic_mask(SubdivScheme::kFourEight, s, 3, 1);
+}
+
+TEST(Subdiv, CatmullClarkTwoStepsAreTheBicubicBSplineMask) {
+  Poly2 s;
+  for (int r = 0; r < 4; ++r) s = s.times_binomial(1, 0).times_binomial(0, 1);
+  expect_dyadic_mask(SubdivScheme::kCatmullClark, s, 2, 2);
+}
+
+TEST(Subdiv, LinearTwoStepsAreTheBilinearMask) {
+  Poly2 s;
+  for (int r = 0; r < 2; ++r) s = s.times_binomial(1, 0).times_binomial(0, 1);
+  expect_dyadic_mask(SubdivScheme::kLinear, s, 1, 1);
+}
+
+// An open grid (with a border) paired from triangles, with leftovers: a mixed triangle/quad base.
+PolyMesh mixed_open_mesh() {
+  PolyMesh m;
+  const int n = 5;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) m.positions.emplace_back(i, j, 0.1 * std::sin(i + 2.0 * j));
+  auto id = [&](int i, int j) { return static_cast<Index>(i * (n + 1) + j); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      if ((i + j) % 3 == 0) {
+        const Index t0[3] = {id(i, j), id(i + 1, j), id(i + 1, j + 1)}, t1[3] = {id(i, j), id(i + 1, j + 1), id(i, j + 1)};
+        m.add_face(t0);
+        m.add_face(t1);
+      } else {
+        const Index q[4] = {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)};
+        m.add_face(q);
+      }
+    }
+  return m;
+}
+
+std::vector<PolyMesh> test_meshes() {
+  return {make_quad_cube(), make_quad_torus(6, 5), mixed_open_mesh()};
+}
+
+TEST(Subdiv, StencilTablesEqualTheFastPath) {
+  for (const PolyMesh& base : test_meshes())
+    for (SubdivScheme scheme : {SubdivScheme::kLinear, SubdivScheme::kCatmullClark, SubdivScheme::kFourEight}) {
+      const int steps = 5;
+      const auto tables = subdiv_stencil_tables(base, scheme, steps);
+      ASSERT_EQ(tables.size(), static_cast<std::size_t>(steps));
+      std::vector<double> values;
+      for (const auto& p : base.positions) values.insert(values.end(), {p.x, p.y, p.z});
+      StencilTable composed = tables[0];
+      for (int s = 1; s < steps; ++s) composed = tables[s].after(composed);
+      const std::vector<double> once = composed.apply(std::span<const double>(values), 3);
+      for (const auto& t : tables) values = t.apply(std::span<const double>(values), 3);
+      const SubdivMesh m = subdivide(base, scheme, steps);
+      ASSERT_EQ(values.size(), 3 * m.positions.size());
+      double worst = 0.0, worst_composed = 0.0;
+      for (std::size_t v = 0; v < m.positions.size(); ++v)
+        for (int c = 0; c < 3; ++c) {
+          worst = std::max(worst, std::abs(values[3 * v + c] - m.positions[v][c]));
+          worst_composed = std::max(worst_composed, std::abs(once[3 * v + c] - m.positions[v][c]));
+        }
+      EXPECT_LT(worst, 1e-12) << to_string(scheme);
+      EXPECT_LT(worst_composed, 1e-12) << to_string(scheme);
+      // Affine invariance: every stencil's weights sum to 1 and are positive (all three schemes are convex
+      // combinations, so the result lies in the convex hull).
+      for (const auto& t : tables)
+        for (std::size_t i = 0; i < t.num_outputs(); ++i) {
+          double sum = 0.0;
+          for (Index j = t.offsets[i]; j < t.offsets[i + 1]; ++j) {
+            sum += t.weights[j];
+            EXPECT_GE(t.weights[j], 0.0);
+          }
+          ASSERT_NEAR(sum, 1.0, 1e-14) << "output " << i;
+        }
+    }
+}
+
+TEST(Subdiv, TopologyInvariantsAtEveryStep) {
+  for (const PolyMesh& base : test_meshes()) {
+    const PolyEdgeCount e0 = count_edges(base);
+    const long euler0 = static_cast<long>(base.num_vertices()) - static_cast<long>(e0.edges) +
+                        static_cast<long>(base.num_faces());
+    for (int steps = 0; steps <= 5; ++steps) {
+      const SubdivMesh m = subdivide(base, SubdivScheme::kFourEight, steps);
+      const PolyMesh poly = m.to_poly_mesh();
+      ASSERT_NO_THROW(poly.validate()) << "steps " << steps;
+      const PolyEdgeCount e = count_edges(poly);
+      EXPECT_EQ(static_cast<long>(poly.num_vertices()) - static_cast<long>(e.edges) + static_cast<long>(poly.num_faces()),
+                euler0)
+          << "steps " << steps;
+      // Each quadrisection doubles the border; a diagonal step leaves it.
+      EXPECT_EQ(e.border_edges, e0.border_edges << (steps / 2)) << "steps " << steps;
+      const TriMesh tri = m.to_tri_mesh();
+      ASSERT_NO_THROW(poly_from_triangles(tri).validate());
+      if (steps >= 2) {
+        EXPECT_TRUE(m.topo.all_quads());
+        // Stored valences and border flags agree with the edges.
+        std::vector<int> val(m.topo.num_vertices, 0);
+        for (Index v : m.topo.edge_verts) ++val[v];
+        for (std::size_t v = 0; v < val.size(); ++v) ASSERT_EQ(val[v], m.topo.valence[v]) << v;
+        // Face points of the first quadrisection have one edge per corner of their base face; every later
+        // vertex is regular: valence 4 inside, 3 on the border.
+        for (std::size_t f = 0; f < base.num_faces(); ++f)
+          ASSERT_EQ(val[base.num_vertices() + f], static_cast<int>(base.face_size(f)));
+        const std::size_t first_regular = base.num_vertices() + base.num_faces();
+        for (std::size_t v = first_regular; v < val.size(); ++v)
+          ASSERT_EQ(val[v], m.topo.vertex_border[v] ? 3 : 4) << v;
+      }
+    }
+  }
+}
+
+TEST(Subdiv, FacesQuadrupleEveryTwoSteps) {
+  const PolyMesh cube = make_quad_cube();
+  for (int steps = 0; steps <= 8; steps += 2) {
+    const SubdivMesh m = subdivide(cube, SubdivScheme::kCatmullClark, steps);
+    EXPECT_EQ(m.topo.num_faces, 6u << steps);
+    // Closed quad mesh: V - E + F = 2 with E = 2F.
+    EXPECT_EQ(m.topo.num_vertices, m.topo.num_faces + 2);
+  }
+}
+
+TEST(Subdiv, PlanesAreReproducedAndBordersFollowTheBorderCurve) {
+  PolyMesh flat = mixed_open_mesh();
+  for (auto& p : flat.positions) p.z = 0.25 * p.x - 0.5 * p.y + 1.0;
+  for (SubdivScheme scheme : {SubdivScheme::kLinear, SubdivScheme::kCatmullClark, SubdivScheme::kFourEight}) {
+    const SubdivMesh m = subdivide(flat, scheme, 4);
+    for (const auto& p : m.positions) ASSERT_NEAR(p.z, 0.25 * p.x - 0.5 * p.y + 1.0, 1e-12);
+    // Border vertices follow the cubic B-spline of the border polygon: away from the four corners (where
+    // the curve is rounded) they stay on the straight sides.
+    for (std::size_t v = 0; v < m.topo.num_vertices; ++v)
+      if (m.topo.vertex_border[v]) {
+        const auto& p = m.positions[v];
+        if (std::min({std::hypot(p.x, p.y), std::hypot(p.x - 5, p.y), std::hypot(p.x, p.y - 5),
+                      std::hypot(p.x - 5, p.y - 5)}) < 1.0)
+          continue;
+        const bool on_line = std::abs(p.x) < 1e-12 || std::abs(p.x - 5) < 1e-12 || std::abs(p.y) < 1e-12 ||
+                             std::abs(p.y - 5) < 1e-12;
+        ASSERT_TRUE(on_line) << v;
+      }
+  }
+}
+
+TEST(Subdiv, CatmullClarkLimitOfASmoothFieldIsCloseAndConverges) {
+  // Limit positions after more steps move less: |limit(L) - positions(L)| shrinks about 4x per level.
+  const PolyMesh torus = make_quad_torus(8, 6);
+  double prev = 1e9;
+  for (int steps = 2; steps <= 8; steps += 2) {
+    const SubdivMesh m = subdivide(torus, SubdivScheme::kCatmullClark, steps);
+    const auto lim = catmull_clark_limit_positions(m);
+    double worst = 0.0;
+    for (std::size_t v = 0; v < lim.size(); ++v) worst = std::max(worst, glm::length(lim[v] - m.positions[v]));
+    EXPECT_LT(worst, prev / 3.0) << steps;
+    prev = worst;
+  }
+  // The limit of a base vertex does not depend on the level it is evaluated from.
+  const auto a = catmull_clark_limit_positions(subdivide(torus, SubdivScheme::kCatmullClark, 2));
+  const auto b = catmull_clark_limit_positions(subdivide(torus, SubdivScheme::kCatmullClark, 6));
+  for (std::size_t v = 0; v < torus.num_vertices(); ++v) EXPECT_LT(glm::length(a[v] - b[v]), 1e-12) << v;
+}
+
+using Tri = std::array<Index, 3>;
+Tri canonical(Tri t) {
+  std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  return t;
+}
+
+TEST(Subdiv, AdaptiveMtFullyRefinedIsUniformAndFrontsConform) {
+  for (const PolyMesh& base : test_meshes())
+    for (int steps : {1, 2, 3, 4}) {
+      SubdivMtInfo info;
+      const Mt mt = build_subdivision_mt(base, SubdivScheme::kFourEight, steps, &info);
+      const SubdivMesh uni = subdivide(base, SubdivScheme::kFourEight, steps);
+      MtFront front(mt);
+      for (NodeId n = 1; n < mt.num_nodes(); ++n) front.apply(n);
+      front.validate();
+      std::vector<VertexId> vids;
+      const TriMesh got = front.to_mesh(nullptr, &vids);
+      const TriMesh want = uni.to_tri_mesh();
+      ASSERT_EQ(got.num_faces(), want.num_faces());
+      EXPECT_EQ(info.uniform_faces, want.num_faces());
+      std::multiset<Tri> a, b;
+      for (std::size_t f = 0; f < got.num_faces(); ++f)
+        a.insert(canonical({vids[got.corner(f, 0)], vids[got.corner(f, 1)], vids[got.corner(f, 2)]}));
+      for (std::size_t f = 0; f < want.num_faces(); ++f)
+        b.insert(canonical({want.corner(f, 0), want.corner(f, 1), want.corner(f, 2)}));
+      EXPECT_EQ(a, b) << "steps " << steps;
+      for (std::size_t v = 0; v < got.num_vertices(); ++v)
+        ASSERT_EQ(got.positions[v], want.positions[vids[v]]);
+      // A coarse query gives a conforming (validated) front with fewer faces.
+      MtFront part(mt);
+      Query q;
+      q.criterion = Criterion::object_error(0.05f);
+      extract(part, q);
+      part.validate();
+      EXPECT_LE(part.num_faces(), want.num_faces());
+      EXPECT_NO_THROW(poly_from_triangles(part.to_mesh()).validate());
+      ASSERT_EQ(info.node_step.size(), mt.num_nodes());
+    }
+}
+
+TEST(Subdiv, BadInputIsRejectedBeforeAllocating) {
+  const PolyMesh cube = make_quad_cube();
+  EXPECT_THROW(subdivide(cube, SubdivScheme::kCatmullClark, -1), InvalidInput);
+  EXPECT_THROW(subdivide(cube, SubdivScheme::kCatmullClark, 40), InvalidInput);
+  EXPECT_THROW(subdiv_stencil_tables(cube, SubdivScheme::kFourEight, 60), InvalidInput);
+  PolyMesh nan = cube;
+  nan.positions[3].y = std::nan("");
+  EXPECT_THROW(subdivide(nan, SubdivScheme::kFourEight, 2), InvalidInput);
+  PolyMesh flipped = cube;
+  std::reverse(flipped.corners.begin(), flipped.corners.begin() + 4);  // one face against the others
+  EXPECT_THROW(subdivide(flipped, SubdivScheme::kFourEight, 2), InvalidInput);
+  // Two cubes sharing one vertex: a non-manifold vertex.
+  PolyMesh two = cube;
+  const Index shift = static_cast<Index>(cube.num_vertices()) - 1;
+  for (const auto& p : cube.positions) two.positions.push_back(p + glm::dvec3(2.0, 2.0, 2.0));
+  two.positions.pop_back();
+  for (std::size_t f = 0; f < cube.num_faces(); ++f) {
+    std::vector<Index> face;
+    for (Index c : cube.face(f)) face.push_back(c == 0 ? 7 : c + shift);
+    two.add_face(face);
+  }
+  try {
+    subdivide(two, SubdivScheme::kFourEight, 1);
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 7"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace varmesh
