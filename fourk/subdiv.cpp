@@ -5,9 +5,10 @@
 // diagonal step then an edge step); Catmull and Clark 1978; Li, Ma and Bao, "sqrt(2) subdivision for
 // quadrilateral meshes", The Visual Computer 2004 (the same topology seen on the quad mesh).
 //
-// Every rule is written once, against a "sink" that receives (output vertex, input vertex, weight)
-// triples: the position sink accumulates immediately (the fast path), the table sink records them as
-// stencil tables for other attributes. So the tables and the positions cannot disagree.
+// The rules are written twice on purpose: once against a "sink" of (output, input, weight) triples, which
+// records them as stencil tables (the reference, and the way to subdivide other attributes), and once as
+// the fast position kernels (one assignment per output, then one scatter pass over the face corners). The
+// tests check that the tables reproduce the fast path to 1e-12 on every scheme.
 #include "fourk/subdiv.hpp"
 
 #include <algorithm>
@@ -124,73 +125,53 @@ SubdivTopology refine_subdiv_topology(const SubdivTopology& p, bool with_edges) 
   SubdivTopology c;
   c.num_vertices = std::size_t{nv} + nf + ne;
   c.num_faces = nc;
-  c.face_verts.resize(std::size_t{4} * nc);
-  if (with_edges) {
-    c.face_edges.resize(std::size_t{4} * nc);
-    c.edge_verts.resize(2 * (std::size_t{2} * ne + nc));
-    c.edge_border.resize(std::size_t{2} * ne + nc);
-  }
+  // Every array is filled in index order by push_back (reserve, no zero fill: the big arrays are written
+  // once).
+  c.face_verts.reserve(std::size_t{4} * nc);
   const Index edge_base = nv + nf;  // index of edge 0's point
   const Index inner_base = 2 * ne;  // first child edge interior to a parent face
+  if (with_edges) {
+    c.face_edges.reserve(std::size_t{4} * nc);
+    c.edge_verts.reserve(2 * (std::size_t{2} * ne + nc));
+    c.edge_border.reserve(std::size_t{2} * ne + nc);
+    for (Index e = 0; e < ne; ++e) {
+      const Index a = p.edge_verts[2 * e], b = p.edge_verts[2 * e + 1], m = edge_base + e;
+      c.edge_verts.insert(c.edge_verts.end(), {a, m, m, b});
+      c.edge_border.insert(c.edge_border.end(), 2, p.edge_border[e]);
+    }
+  }
+  const bool quads = p.all_quads();
   for (Index f = 0; f < nf; ++f) {
-    const Index off = p.offset(f), k = p.face_size(f);
+    const Index off = quads ? 4 * f : p.face_offsets[f], k = quads ? 4 : p.face_offsets[f + 1] - off;
     const Index fpoint = nv + f;
     for (Index i = 0; i < k; ++i) {
       const Index ci = p.face_verts[off + i];
       const Index ei = p.face_edges[off + i];
       const Index iprev = i == 0 ? k - 1 : i - 1;
       const Index eprev = p.face_edges[off + iprev];
-      Index* q = &c.face_verts[std::size_t{4} * (off + i)];
-      q[0] = ci;
-      q[1] = edge_base + ei;
-      q[2] = fpoint;
-      q[3] = edge_base + eprev;
+      c.face_verts.insert(c.face_verts.end(), {ci, edge_base + ei, fpoint, edge_base + eprev});
       if (with_edges) {
-        Index* qe = &c.face_edges[std::size_t{4} * (off + i)];
-        qe[0] = half_at(p, ei, ci);
-        qe[1] = inner_base + off + i;
-        qe[2] = inner_base + off + iprev;
-        qe[3] = half_at(p, eprev, ci);
-        Index* ev = &c.edge_verts[2 * std::size_t{inner_base + off + i}];
-        ev[0] = edge_base + ei;
-        ev[1] = fpoint;
+        c.face_edges.insert(c.face_edges.end(),
+                            {half_at(p, ei, ci), inner_base + off + i, inner_base + off + iprev, half_at(p, eprev, ci)});
+        c.edge_verts.insert(c.edge_verts.end(), {edge_base + ei, fpoint});
+        c.edge_border.push_back(0);
       }
     }
   }
-  if (with_edges) {
-    for (Index e = 0; e < ne; ++e) {
-      const Index a = p.edge_verts[2 * e], b = p.edge_verts[2 * e + 1], m = edge_base + e;
-      Index* ev = &c.edge_verts[4 * std::size_t{e}];
-      ev[0] = a;
-      ev[1] = m;
-      ev[2] = m;
-      ev[3] = b;
-      c.edge_border[2 * e] = c.edge_border[2 * e + 1] = p.edge_border[e];
-    }
-  }
-  c.valence.resize(c.num_vertices);
-  c.vertex_border.resize(c.num_vertices);
-  std::copy(p.valence.begin(), p.valence.end(), c.valence.begin());
-  std::copy(p.vertex_border.begin(), p.vertex_border.end(), c.vertex_border.begin());
-  for (Index f = 0; f < nf; ++f) {
-    c.valence[nv + f] = static_cast<std::uint16_t>(p.face_size(f));
-    c.vertex_border[nv + f] = 0;
-  }
+  c.valence.reserve(c.num_vertices);
+  c.vertex_border.reserve(c.num_vertices);
+  c.valence.assign(p.valence.begin(), p.valence.end());
+  c.vertex_border.assign(p.vertex_border.begin(), p.vertex_border.end());
+  for (Index f = 0; f < nf; ++f) c.valence.push_back(static_cast<std::uint16_t>(quads ? 4 : p.face_size(f)));
+  c.vertex_border.insert(c.vertex_border.end(), nf, 0);
   for (Index e = 0; e < ne; ++e) {
-    c.valence[edge_base + e] = p.edge_border[e] ? 3 : 4;
-    c.vertex_border[edge_base + e] = p.edge_border[e];
+    c.valence.push_back(p.edge_border[e] ? 3 : 4);
+    c.vertex_border.push_back(p.edge_border[e]);
   }
   return c;
 }
 
 namespace {
-
-// Accumulates positions: out[dst] += w * in[src]. `out` starts at zero.
-struct PositionSink {
-  const glm::dvec3* in;
-  glm::dvec3* out;
-  void add(Index dst, Index src, double w) const noexcept { out[dst] += w * in[src]; }
-};
 
 // Records the triples; to_table() groups them by output.
 struct TableSink {
@@ -331,6 +312,103 @@ void check_span(std::size_t got, std::size_t want, const char* what) {
                        " positions, expected " + std::to_string(want));
 }
 
+// The fast path: the same rules as diagonal_rules / edge_rules (the tests check the tables against it),
+// in place on one position array whose capacity is the final size (subdivide() reserves it once): new
+// points are appended after the old ones, and the old vertices (and 4-8 face points), whose rules read
+// pre-step positions, are computed into a scratch array and copied back at the end of the step. Each
+// output is assigned once and then receives one scatter pass over the face corners; nothing is zeroed.
+// K = 4 for all-quad levels (the loops unroll), 0 for general polygons.
+template <int K>
+void diagonal_in_place(const SubdivTopology& t, SubdivScheme scheme, glm::dvec3* p, std::vector<glm::dvec3>& tmp) {
+  const Index nv = static_cast<Index>(t.num_vertices), nf = static_cast<Index>(t.num_faces);
+  const Index* fv = t.face_verts.data();
+  for (Index f = 0; f < nf; ++f) {
+    const Index off = K ? K * f : t.face_offsets[f], k = K ? K : t.face_offsets[f + 1] - off;
+    glm::dvec3 sum(0.0);
+    for (Index i = 0; i < k; ++i) sum += p[fv[off + i]];
+    p[nv + f] = sum * kInverse(k);
+  }
+  if (scheme != SubdivScheme::kFourEight) return;
+  tmp.resize(nv);
+  for (Index v = 0; v < nv; ++v)
+    tmp[v] = t.vertex_border[v] ? p[v] : (1.0 - four_eight_weight(t.valence[v])) * p[v];
+  const std::size_t ne = t.num_edges();
+  for (std::size_t e = 0; e < ne; ++e) {
+    const Index a = t.edge_verts[2 * e], b = t.edge_verts[2 * e + 1];
+    if (!t.vertex_border[a]) tmp[a] += four_eight_weight(t.valence[a]) * kInverse(t.valence[a]) * p[b];
+    if (!t.vertex_border[b]) tmp[b] += four_eight_weight(t.valence[b]) * kInverse(t.valence[b]) * p[a];
+  }
+  std::copy(tmp.begin(), tmp.end(), p);
+}
+
+template <int K>
+void edge_in_place(const SubdivTopology& t, SubdivScheme scheme, glm::dvec3* p, std::vector<glm::dvec3>& tmp) {
+  const Index nv = static_cast<Index>(t.num_vertices), nf = static_cast<Index>(t.num_faces);
+  const Index edge_base = nv + nf;
+  const std::size_t ne = t.num_edges();
+  const bool linear = scheme == SubdivScheme::kLinear, cc = scheme == SubdivScheme::kCatmullClark;
+  const bool fe = scheme == SubdivScheme::kFourEight;
+  const Index* fv = t.face_verts.data();
+  const Index* fedge = t.face_edges.data();
+  // Scratch: new old-vertex positions [0, nv), then (4-8) new face points [nv, nv + nf).
+  if (!linear) {
+    tmp.resize(fe ? std::size_t{nv} + nf : nv);
+    for (Index v = 0; v < nv; ++v) {
+      double self;
+      if (t.vertex_border[v]) self = 0.75;
+      else if (cc) self = (t.valence[v] - 2.0) * kInverse(t.valence[v]);
+      else self = 1.0 - four_eight_weight(t.valence[v]);
+      tmp[v] = self * p[v];
+    }
+  }
+  // Edge points (the corner part) and the border curve.
+  for (std::size_t e = 0; e < ne; ++e) {
+    const Index a = t.edge_verts[2 * e], b = t.edge_verts[2 * e + 1];
+    const bool border = t.edge_border[e] != 0;
+    p[edge_base + e] = (linear || border ? 0.5 : 0.25) * (p[a] + p[b]);
+    if (border && !linear) {
+      tmp[a] += 0.125 * p[b];
+      tmp[b] += 0.125 * p[a];
+    }
+  }
+  if (linear) return;
+  // Face points into their edge points and interior corners; 4-8 face points smoothed.
+  for (Index f = 0; f < nf; ++f) {
+    const Index off = K ? K * f : t.face_offsets[f], k = K ? K : t.face_offsets[f + 1] - off;
+    const glm::dvec3 fp = p[nv + f];
+    const glm::dvec3 quarter = 0.25 * fp;
+    glm::dvec3 corner_sum(0.0);
+    for (Index i = 0; i < k; ++i) {
+      const Index e = fedge[off + i];
+      if (!t.edge_border[e]) p[edge_base + e] += quarter;
+      const Index c = fv[off + i];
+      if (fe) corner_sum += p[c];
+      if (t.vertex_border[c]) continue;
+      const double inv = kInverse(t.valence[c]);
+      if (cc) {
+        // 1/n^2 (f + the two edge neighbours in this face / 2): each edge neighbour of an interior vertex
+        // lies in two of its faces, so the halves add up to 1/n^2 per neighbour.
+        const Index next = fv[off + (i + 1 == k ? 0 : i + 1)], prev = fv[off + (i == 0 ? k - 1 : i - 1)];
+        tmp[c] += (inv * inv) * (fp + 0.5 * (p[next] + p[prev]));
+      } else {
+        tmp[c] += (four_eight_weight(t.valence[c]) * inv) * fp;
+      }
+    }
+    if (fe) tmp[nv + f] = 0.5 * fp + (0.5 * kInverse(k)) * corner_sum;
+  }
+  std::copy(tmp.begin(), tmp.end(), p);
+}
+
+void diagonal_fast(const SubdivTopology& t, SubdivScheme scheme, glm::dvec3* p, std::vector<glm::dvec3>& tmp) {
+  if (t.all_quads()) diagonal_in_place<4>(t, scheme, p, tmp);
+  else diagonal_in_place<0>(t, scheme, p, tmp);
+}
+
+void edge_fast(const SubdivTopology& t, SubdivScheme scheme, glm::dvec3* p, std::vector<glm::dvec3>& tmp) {
+  if (t.all_quads()) edge_in_place<4>(t, scheme, p, tmp);
+  else edge_in_place<0>(t, scheme, p, tmp);
+}
+
 }  // namespace
 
 void subdiv_diagonal_step(const SubdivTopology& topo, SubdivScheme scheme, std::span<const glm::dvec3> in,
@@ -338,9 +416,9 @@ void subdiv_diagonal_step(const SubdivTopology& topo, SubdivScheme scheme, std::
   if (!topo.has_edges()) throw InvalidInput("subdiv_diagonal_step: the level has no edges");
   check_span(in.size(), topo.num_vertices, "input");
   check_span(out.size(), topo.num_vertices + topo.num_faces, "output");
-  std::fill(out.begin(), out.end(), glm::dvec3(0.0));
-  PositionSink sink{in.data(), out.data()};
-  diagonal_rules(topo, scheme, sink);
+  std::copy(in.begin(), in.end(), out.begin());
+  std::vector<glm::dvec3> tmp;
+  diagonal_fast(topo, scheme, out.data(), tmp);
 }
 
 void subdiv_edge_step(const SubdivTopology& topo, SubdivScheme scheme, std::span<const glm::dvec3> in,
@@ -348,9 +426,9 @@ void subdiv_edge_step(const SubdivTopology& topo, SubdivScheme scheme, std::span
   if (!topo.has_edges()) throw InvalidInput("subdiv_edge_step: the level has no edges");
   check_span(in.size(), topo.num_vertices + topo.num_faces, "input");
   check_span(out.size(), topo.num_vertices + topo.num_faces + topo.num_edges(), "output");
-  std::fill(out.begin(), out.end(), glm::dvec3(0.0));
-  PositionSink sink{in.data(), out.data()};
-  edge_rules(topo, scheme, sink);
+  std::copy(in.begin(), in.end(), out.begin());
+  std::vector<glm::dvec3> tmp;
+  edge_fast(topo, scheme, out.data(), tmp);
 }
 
 StencilTable subdiv_diagonal_stencils(const SubdivTopology& topo, SubdivScheme scheme) {
@@ -430,7 +508,8 @@ StencilTable StencilTable::after(const StencilTable& first) const {
 
 namespace {
 
-void check_steps(const SubdivTopology& t, int steps) {
+// Throws when `steps` is negative or too large; returns the number of positions after `steps` steps.
+std::size_t check_steps(const SubdivTopology& t, int steps) {
   if (steps < 0) throw InvalidInput("subdivision: steps must be >= 0 (got " + std::to_string(steps) + ")");
   LevelCounts c = counts_of(t);
   for (int s = 1; s < steps; s += 2) {
@@ -443,6 +522,7 @@ void check_steps(const SubdivTopology& t, int steps) {
   if (c.v + c.f >= kIndexLimit)
     throw InvalidInput("subdivision: " + std::to_string(steps) + " steps would make 2^32 vertices or more (steps)",
                        static_cast<std::uint64_t>(steps));
+  return static_cast<std::size_t>(steps % 2 ? c.v + c.f : c.v);
 }
 
 }  // namespace
@@ -452,21 +532,21 @@ SubdivMesh subdivide(const PolyMesh& base, SubdivScheme scheme, int steps, const
   m.scheme = scheme;
   m.steps = steps;
   m.topo = make_subdiv_topology(base);
-  check_steps(m.topo, steps);
+  const std::size_t final_size = check_steps(m.topo, steps);
+  // One position array for all steps, reserved at its final size: every step appends in place.
+  m.positions.reserve(final_size);
   m.positions = base.positions;
-  std::vector<glm::dvec3> next;
+  std::vector<glm::dvec3> tmp;
   for (int s = 0; s < steps; ++s) {
     if (s % 2 == 0) {
-      next.resize(m.topo.num_vertices + m.topo.num_faces);
-      subdiv_diagonal_step(m.topo, scheme, m.positions, next);
+      m.positions.resize(m.topo.num_vertices + m.topo.num_faces);
+      diagonal_fast(m.topo, scheme, m.positions.data(), tmp);
     } else {
-      next.resize(m.topo.num_vertices + m.topo.num_faces + m.topo.num_edges());
-      subdiv_edge_step(m.topo, scheme, m.positions, next);
+      m.positions.resize(m.topo.num_vertices + m.topo.num_faces + m.topo.num_edges());
+      edge_fast(m.topo, scheme, m.positions.data(), tmp);
       m.topo = refine_subdiv_topology(m.topo, options.keep_last_edges || s + 1 < steps);
     }
-    m.positions.swap(next);
   }
-  std::vector<glm::dvec3>().swap(next);
   return m;
 }
 
