@@ -14,6 +14,7 @@
 #include "apps/demo.hpp"
 #include "apps/hierarchy_cmds.hpp"
 #include "apps/render.hpp"
+#include "apps/subdiv_cmd.hpp"
 #include "fourk/grid48.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/heightfield.hpp"
@@ -240,6 +241,10 @@ int run(int argc, char** argv) {
   auto* query = app.add_subcommand("query", "Extract a front of a .vrm hierarchy by error, camera, ramp or budget");
   add_query_options(*query, qa);
 
+  SubdivArgs sa;
+  auto* subdiv = app.add_subcommand("subdiv", "Subdivide a polygon mesh: 4-8, Catmull-Clark, Zwart-Powell, Doo-Sabin, quasi 4-8, linear; uniform or adaptive");
+  add_subdiv_options(*subdiv, sa);
+
   CompareArgs ca;
   auto* compare = app.add_subcommand("compare", "Kim-Lee Table 2: three selective refinement schemes on image, terrain and 3D models, table + PNG");
   add_compare_options(*compare, ca);
@@ -257,6 +262,7 @@ int run(int argc, char** argv) {
     if (*compare) return run_compare(ca);
     if (*build) return run_build(ba);
     if (*query) return run_query(qa);
+    if (*subdiv) return run_subdiv(sa);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "varmesh: error: %s\n", e.what());
     return 1;

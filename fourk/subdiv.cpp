@@ -210,6 +210,19 @@ struct InverseTable {
 };
 const InverseTable kInverse;
 
+// Self weights of old vertices. A vertex no face uses (valence 0; PolyMesh allows them) stays where it is,
+// as in OpenSubdiv.
+inline double diagonal_self(const SubdivTopology& t, Index v, SubdivScheme scheme) noexcept {
+  if (scheme != SubdivScheme::kFourEight || t.vertex_border[v] || t.valence[v] == 0) return 1.0;
+  return 1.0 - four_eight_weight(t.valence[v]);
+}
+inline double edge_self(const SubdivTopology& t, Index v, SubdivScheme scheme) noexcept {
+  if (scheme == SubdivScheme::kLinear || t.valence[v] == 0) return 1.0;
+  if (t.vertex_border[v]) return 0.75;
+  if (scheme == SubdivScheme::kCatmullClark) return (t.valence[v] - 2.0) * kInverse(t.valence[v]);
+  return 1.0 - four_eight_weight(t.valence[v]);
+}
+
 template <class Sink>
 void diagonal_rules(const SubdivTopology& t, SubdivScheme scheme, Sink& sink) {
   const Index nv = static_cast<Index>(t.num_vertices), nf = static_cast<Index>(t.num_faces);
@@ -224,7 +237,7 @@ void diagonal_rules(const SubdivTopology& t, SubdivScheme scheme, Sink& sink) {
   }
   // 4-8: v' = (1 - a_n) v + a_n / n sum(edge neighbours); border vertices stay.
   for (Index v = 0; v < nv; ++v)
-    sink.add(v, v, t.vertex_border[v] ? 1.0 : 1.0 - four_eight_weight(t.valence[v]));
+    sink.add(v, v, diagonal_self(t, v, scheme));
   const std::size_t ne = t.num_edges();
   for (std::size_t e = 0; e < ne; ++e) {
     const Index a = t.edge_verts[2 * e], b = t.edge_verts[2 * e + 1];
@@ -260,17 +273,7 @@ void edge_rules(const SubdivTopology& t, SubdivScheme scheme, Sink& sink) {
     for (Index v = 0; v < nv; ++v) sink.add(v, v, 1.0);
   } else {
     const bool cc = scheme == SubdivScheme::kCatmullClark;
-    for (Index v = 0; v < nv; ++v) {
-      double self;
-      if (t.vertex_border[v]) {
-        self = 0.75;
-      } else if (cc) {
-        self = (t.valence[v] - 2.0) * kInverse(t.valence[v]);
-      } else {
-        self = 1.0 - four_eight_weight(t.valence[v]);
-      }
-      sink.add(v, v, self);
-    }
+    for (Index v = 0; v < nv; ++v) sink.add(v, v, edge_self(t, v, scheme));
     // Border neighbours (1/8 each) and, for Catmull-Clark, interior edge neighbours (1/n^2).
     for (std::size_t e = 0; e < ne; ++e) {
       const Index a = t.edge_verts[2 * e], b = t.edge_verts[2 * e + 1];
@@ -331,7 +334,7 @@ void diagonal_in_place(const SubdivTopology& t, SubdivScheme scheme, glm::dvec3*
   if (scheme != SubdivScheme::kFourEight) return;
   tmp.resize(nv);
   for (Index v = 0; v < nv; ++v)
-    tmp[v] = t.vertex_border[v] ? p[v] : (1.0 - four_eight_weight(t.valence[v])) * p[v];
+    tmp[v] = diagonal_self(t, v, scheme) * p[v];
   const std::size_t ne = t.num_edges();
   for (std::size_t e = 0; e < ne; ++e) {
     const Index a = t.edge_verts[2 * e], b = t.edge_verts[2 * e + 1];
@@ -353,13 +356,7 @@ void edge_in_place(const SubdivTopology& t, SubdivScheme scheme, glm::dvec3* p, 
   // Scratch: new old-vertex positions [0, nv), then (4-8) new face points [nv, nv + nf).
   if (!linear) {
     tmp.resize(fe ? std::size_t{nv} + nf : nv);
-    for (Index v = 0; v < nv; ++v) {
-      double self;
-      if (t.vertex_border[v]) self = 0.75;
-      else if (cc) self = (t.valence[v] - 2.0) * kInverse(t.valence[v]);
-      else self = 1.0 - four_eight_weight(t.valence[v]);
-      tmp[v] = self * p[v];
-    }
+    for (Index v = 0; v < nv; ++v) tmp[v] = edge_self(t, v, scheme) * p[v];
   }
   // Edge points (the corner part) and the border curve.
   for (std::size_t e = 0; e < ne; ++e) {
@@ -658,7 +655,7 @@ std::vector<glm::dvec3> catmull_clark_limit_positions(const SubdivMesh& mesh) {
     const double n = t.valence[v];
     if (t.vertex_border[v]) {
       out[v] = (4.0 * p[v] + acc[v]) / 6.0;
-    } else if (t.valence[v] <= 2) {
+    } else if (t.valence[v] == 0) {
       out[v] = p[v];
     } else {
       out[v] = (n * n * p[v] + acc[v]) / (n * (n + 5.0));

@@ -43,7 +43,7 @@
 /// Borders (all schemes): border vertices and border edges follow the cubic B-spline curve of the
 /// border: edge step e = midpoint, v' = 3/4 v + 1/8 (b0 + b1) with b0, b1 its border neighbours; the
 /// diagonal step leaves border vertices where they are. For Catmull-Clark these are OpenSubdiv's rules
-/// with Sdc::Options::VTX_BOUNDARY_EDGE_ONLY.
+/// with Sdc::Options::VTX_BOUNDARY_EDGE_ONLY. Vertices no face uses keep their position in every scheme.
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -161,7 +161,9 @@ std::vector<StencilTable> subdiv_stencil_tables(const PolyMesh& base, SubdivSche
 
 /// Catmull-Clark limit positions of the vertices of an even-step Catmull-Clark mesh: interior vertex with
 /// n >= 3 edges (n^2 v + 4 sum(edge neighbours) + sum(diagonal neighbours)) / (n (n + 5)); border vertex
-/// (b0 + 4 v + b1) / 6; an interior vertex with 2 edges stays where it is (OpenSubdiv's choice).
+/// (b0 + 4 v + b1) / 6. The interior formula holds for n = 2 too (the true limit, as OpenSubdiv's Bfr
+/// evaluates it; PrimvarRefiner::Limit instead returns the point itself there). A vertex no face uses
+/// stays where it is.
 /// Throws InvalidInput when mesh is not an even-step Catmull-Clark mesh.
 std::vector<glm::dvec3> catmull_clark_limit_positions(const SubdivMesh& mesh);
 

@@ -309,6 +309,17 @@ TEST(Subdiv, AdaptiveMtFullyRefinedIsUniformAndFrontsConform) {
     }
 }
 
+TEST(Subdiv, UnreferencedVerticesStayWhereTheyAre) {
+  PolyMesh cube = make_quad_cube();
+  cube.positions.emplace_back(5.0, 6.0, 7.0);  // no face uses it
+  for (SubdivScheme scheme : {SubdivScheme::kLinear, SubdivScheme::kCatmullClark, SubdivScheme::kFourEight}) {
+    const SubdivMesh m = subdivide(cube, scheme, 5);
+    EXPECT_EQ(m.positions[8], glm::dvec3(5.0, 6.0, 7.0)) << to_string(scheme);
+  }
+  const SubdivMesh cc = subdivide(cube, SubdivScheme::kCatmullClark, 4);
+  EXPECT_EQ(catmull_clark_limit_positions(cc)[8], glm::dvec3(5.0, 6.0, 7.0));
+}
+
 TEST(Subdiv, BadInputIsRejectedBeforeAllocating) {
   const PolyMesh cube = make_quad_cube();
   EXPECT_THROW(subdivide(cube, SubdivScheme::kCatmullClark, -1), InvalidInput);

@@ -1,0 +1,599 @@
+// `varmesh subdiv` (see subdiv_cmd.hpp).
+//
+// Schemes: 4-8 subdivision (Velho and Zorin, "4-8 Subdivision", CAGD 2001), Catmull-Clark (1978) as two
+// binary 4-8 steps, linear 4-8 refinement, quasi 4-8 (Velho, "Quasi 4-8 subdivision", CAGD 2001: 4-8
+// refinement of a triangle mesh whose triangles are paired into blocks; our stand-in runs the 4-8 rules of
+// fourk/subdiv.hpp on the paired mesh, not Velho's quasi 4-8 smoothing rules), Zwart-Powell mid-edge steps
+// (Peters and Reif 1997) and Doo-Sabin (1978), fourk/subdiv_dual.hpp. Figure 19 of Velho and Gomes,
+// "Variable resolution 4-k meshes" (CGF 2000), compares them on one model; --figure draws its analogue.
+#include "apps/subdiv_cmd.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+#include <CLI/CLI.hpp>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
+#include <glm/vec2.hpp>
+
+#include "apps/cli_util.hpp"
+#include "apps/render.hpp"
+#include "fourk/poly_mesh.hpp"
+#include "fourk/subdiv.hpp"
+#include "fourk/subdiv_dual.hpp"
+#include "multitri/errors.hpp"
+#include "multitri/image.hpp"
+#include "multitri/mesh_io.hpp"
+#include "multitri/mt_front.hpp"
+#include "multitri/query.hpp"
+
+namespace varmesh::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// fourk/subdiv_dual.cpp is not yet compiled into varmesh::fourk (only into test_subdiv_dual). When it is,
+// set this to true: run_dual() below is the only code that calls into it, and a discarded `if constexpr`
+// branch needs no definition at link time (C++17 [basic.def.odr]).
+constexpr bool kDualSchemesBuilt = false;
+
+enum class Scheme { kFourEight, kZwartPowell, kCatmullClark, kDooSabin, kQuasi48, kLinear };
+
+struct SchemeInfo {
+  Scheme scheme;
+  const char* name;   // the --scheme value
+  const char* title;  // for reports
+  int steps_per_level;
+  bool dual;
+};
+
+// One level = one dyadic refinement (faces x4): two binary 4-8 steps, two Zwart-Powell (sqrt 2) steps or
+// one Doo-Sabin step.
+constexpr SchemeInfo kSchemes[] = {
+    {Scheme::kFourEight, "48", "4-8 (Velho-Zorin)", 2, false},
+    {Scheme::kZwartPowell, "zwart-powell", "Zwart-Powell (mid-edge)", 2, true},
+    {Scheme::kCatmullClark, "catmull-clark", "Catmull-Clark", 2, false},
+    {Scheme::kDooSabin, "doo-sabin", "Doo-Sabin", 1, true},
+    {Scheme::kQuasi48, "quasi48", "quasi 4-8 (4-8 rules on paired triangles)", 2, false},
+    {Scheme::kLinear, "linear", "linear 4-8", 2, false},
+};
+
+const SchemeInfo& scheme_info(Scheme s) {
+  for (const SchemeInfo& i : kSchemes)
+    if (i.scheme == s) return i;
+  throw InvalidInput("subdiv: unknown scheme");
+}
+
+const SchemeInfo& parse_scheme(const std::string& name) {
+  const std::string n = name.empty() ? "48" : name;
+  for (const SchemeInfo& i : kSchemes)
+    if (n == i.name) return i;
+  throw InvalidInput("subdiv: unknown --scheme '" + name +
+                     "' (48, zwart-powell, catmull-clark, doo-sabin, quasi48, linear)");
+}
+
+SubdivScheme primal(Scheme s) {
+  switch (s) {
+    case Scheme::kCatmullClark: return SubdivScheme::kCatmullClark;
+    case Scheme::kLinear: return SubdivScheme::kLinear;
+    default: return SubdivScheme::kFourEight;
+  }
+}
+
+bool is_mesh_file(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".obj" || ext == ".off" || ext == ".ply";
+}
+
+// The input: the polygon mesh the schemes run on and the triangle mesh quasi48 pairs.
+struct Input {
+  enum class Source { kBuiltin, kPolygonFile, kTriangleFile };
+  std::string name;  // "cube", "torus" or the file's stem (picture names)
+  Source source = Source::kBuiltin;
+  PolyMesh poly;      // built-in quads, a file's polygons, or a triangle file's triangles paired into quads
+  TriMesh triangles;  // the file as read, or the built-in quads triangulated along their 4-8 diagonals
+  std::string description;  // how `poly` was made, for the report
+};
+
+// Errors of the library name a vertex or face; say which mesh they are in. (what() already ends with the
+// element, so the new error does not repeat it.)
+template <class Fn>
+auto about(const std::string& what, Fn&& fn) {
+  try {
+    return fn();
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(what + ": " + e.what());
+  }
+}
+
+// The readers fan-triangulate polygons: corners (c0, c1, ..., ck) arrive as the consecutive triangles
+// (c0, c(i-1), c(i)), i = 2..k (multitri/mesh_io.hpp), and ReadInfo only counts the polygons. This undoes
+// the fans up to quads: a triangle (a, x, y) right after a triangle (a, w, x) (y not in it) makes the quad
+// (a, w, x, y). So a file of quads (and triangles) comes back exactly, except that two of its own triangles
+// in that pattern become a quad (as pairing would make); a k-gon, k > 4, comes back as quads and at most
+// one triangle. Merging two triangles across their shared edge keeps the mesh a valid polygon mesh.
+PolyMesh quads_from_fans(const TriMesh& t) {
+  PolyMesh p;
+  p.positions.reserve(t.num_vertices());
+  for (const glm::vec3& v : t.positions) p.positions.emplace_back(v);
+  std::vector<Index> poly;
+  for (std::size_t f = 0; f < t.num_faces(); ++f) {
+    const Index a = t.corner(f, 0), x = t.corner(f, 1), y = t.corner(f, 2);
+    if (poly.size() == 3 && poly[0] == a && poly[2] == x && y != poly[0] && y != poly[1] && y != poly[2]) {
+      poly.push_back(y);
+      continue;
+    }
+    if (!poly.empty()) p.add_face(poly);
+    poly = {a, x, y};
+  }
+  if (!poly.empty()) p.add_face(poly);
+  return p;
+}
+
+std::string face_summary(const PolyMesh& m) {
+  std::size_t tris = 0, quads = 0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    tris += m.face_size(f) == 3;
+    quads += m.face_size(f) == 4;
+  }
+  std::string s = std::to_string(m.num_faces()) + " faces (" + std::to_string(quads) + " quads";
+  if (tris) s += ", " + std::to_string(tris) + " triangles";
+  if (m.num_faces() > tris + quads) s += ", " + std::to_string(m.num_faces() - tris - quads) + " larger polygons";
+  return s + ")";
+}
+
+PolyMesh paired(const std::string& name, const TriMesh& t, std::string* description) {
+  std::size_t left = 0;
+  PolyMesh p = about(name, [&] { return pair_triangles(t, &left); });
+  *description = std::to_string(p.num_vertices()) + " vertices, " + std::to_string(t.num_faces()) +
+                 " triangles paired into " + std::to_string((t.num_faces() - left) / 2) + " quads, " +
+                 std::to_string(left) + " left";
+  return p;
+}
+
+Input load_input(const std::string& in) {
+  Input r;
+  if (in == "cube" || in == "torus") {
+    r.name = in;
+    r.poly = in == "cube" ? make_quad_cube() : make_quad_torus(16, 8);
+    r.triangles = triangulate(r.poly);
+    r.description = std::to_string(r.poly.num_vertices()) + " vertices, " + face_summary(r.poly);
+    return r;
+  }
+  if (!is_mesh_file(in)) throw InvalidInput("subdiv: INPUT must be a mesh (.obj, .off, .ply) or cube | torus, not '" + in + "'");
+  r.name = fs::path(in).stem().string();
+  ReadInfo info;
+  r.triangles = read_mesh(in, &info);
+  r.triangles.normals.clear();
+  r.triangles.texcoords.clear();
+  r.triangles.colors.clear();
+  if (info.polygons_triangulated > 0) {
+    r.source = Input::Source::kPolygonFile;
+    r.poly = quads_from_fans(r.triangles);
+    r.description = std::to_string(r.poly.num_vertices()) + " vertices, " + face_summary(r.poly) + ", rebuilt from the " +
+                    std::to_string(r.triangles.num_faces()) + " triangles the reader made of the file's faces";
+  } else {
+    r.source = Input::Source::kTriangleFile;
+    r.poly = paired(in, r.triangles, &r.description);
+  }
+  about(in, [&] { r.poly.validate(); return 0; });
+  return r;
+}
+
+// quasi48 runs on the triangles paired into quads: for a triangle file, the mesh the other schemes get;
+// for a polygon file or a built-in quad mesh, its triangulation paired by the matching (which need not
+// pair the two triangles of a quad together).
+PolyMesh base_for(const Input& in, Scheme s, std::string* description) {
+  if (s != Scheme::kQuasi48 || in.source == Input::Source::kTriangleFile) {
+    *description = in.description;
+    return in.poly;
+  }
+  return paired(in.name, in.triangles, description);
+}
+
+int steps_for(const SchemeInfo& s, const SubdivArgs& a) {
+  if (a.levels != SubdivArgs::kUnsetCount && a.steps != SubdivArgs::kUnsetCount)
+    throw InvalidInput("subdiv: give --levels or --steps, not both");
+  if (a.steps != SubdivArgs::kUnsetCount) {
+    if (a.steps < 0) throw InvalidInput("subdiv: --steps must be >= 0 (got " + std::to_string(a.steps) + ")");
+    return a.steps;
+  }
+  if (a.levels == SubdivArgs::kUnsetCount) throw InvalidInput("subdiv: give --levels N (or --steps S)");
+  if (a.levels < 0) throw InvalidInput("subdiv: --levels must be >= 0 (got " + std::to_string(a.levels) + ")");
+  if (a.levels > 64) throw InvalidInput("subdiv: --levels " + std::to_string(a.levels) + " is absurd (every mesh exceeds 2^31 triangles by level 16)");
+  return a.levels * s.steps_per_level;
+}
+
+struct Size {
+  std::uint64_t vertices = 0, polygons = 0, triangles = 0;
+};
+
+constexpr std::uint64_t kSaturated = UINT64_MAX;  // "more than 2^60"
+
+// Counts after `steps` binary steps (fourk/subdiv.hpp: a quadrisection turns V, F, E, C into V + F + E,
+// C, 2E + C, 4C; an odd step adds one face point per face and fans each k-gon into k triangles).
+Size primal_size(const PolyMesh& base, int steps) {
+  std::uint64_t v = base.num_vertices(), f = base.num_faces(), e = count_edges(base).edges, c = base.corners.size();
+  for (int s = 1; s < steps; s += 2) {
+    // E <= C on a manifold mesh, so nothing below overflows while C <= 2^60.
+    if (c > (std::uint64_t{1} << 60)) return {kSaturated, kSaturated, kSaturated};
+    v = v + f + e;
+    e = 2 * e + c;
+    f = c;
+    c = 4 * c;
+  }
+  if (steps % 2 == 1) return {v + f, e, c};
+  return {v, f, c - 2 * f};
+}
+
+std::string count(std::uint64_t n) { return n == kSaturated ? std::string("more than 2^60") : std::to_string(n); }
+
+// Memory: a uniform result costs about 80 bytes per triangle at its peak; the Multi-Triangulation of
+// --adaptive keeps every level, about 300 bytes per uniform triangle, hence a limit 8 times lower.
+constexpr std::uint64_t kAdaptiveLimitDivisor = 8;
+
+void check_size(const Size& size, const SchemeInfo& s, int steps, std::uint64_t max_triangles, bool adaptive = false) {
+  const std::uint64_t limit = adaptive ? max_triangles / kAdaptiveLimitDivisor : max_triangles;
+  if (size.triangles > limit || size.vertices > limit)
+    throw InvalidInput("subdiv: " + std::string(s.name) + " with " + std::to_string(steps) + " steps would make " +
+                       count(size.triangles) + " triangles, more than the limit " + std::to_string(limit) +
+                       (adaptive ? " (--max-triangles / 8 with --adaptive; lower --levels)" : " (--max-triangles; lower --levels)"));
+}
+
+PolyMesh run_dual(const PolyMesh& base, const SchemeInfo& s, int steps, std::uint64_t max_triangles) {
+  if constexpr (kDualSchemesBuilt) {
+    const DualScheme d = s.scheme == Scheme::kZwartPowell ? DualScheme::kZwartPowell : DualScheme::kDooSabin;
+    const DualMeshSize ds = dual_mesh_size(base, d, steps);
+    const std::uint64_t tris = ds.corners == UINT64_MAX ? kSaturated : ds.corners - 2 * ds.faces;
+    check_size({ds.vertices, ds.faces, tris}, s, steps, max_triangles);
+    return subdivide_dual(base, d, steps);
+  } else {
+    (void)base, (void)steps, (void)max_triangles;
+    throw InvalidInput("subdiv: --scheme " + std::string(s.name) +
+                       ": the dual schemes (fourk/subdiv_dual.cpp) are not built into this varmesh yet");
+  }
+}
+
+// A uniform result: the output triangles and, for pictures, the polygons.
+struct Result {
+  TriMesh triangles;
+  PolyMesh polygons;
+  std::size_t num_polygons = 0;
+  double ms = 0.0;
+};
+
+Result run_uniform(const PolyMesh& base, const SchemeInfo& s, int steps, std::uint64_t max_triangles, bool want_polygons) {
+  Result r;
+  if (s.dual) {
+    Stopwatch watch;
+    PolyMesh m = run_dual(base, s, steps, max_triangles);
+    r.ms = watch.ms();
+    r.triangles = triangulate(m);
+    r.num_polygons = m.num_faces();
+    if (want_polygons) r.polygons = std::move(m);
+    return r;
+  }
+  check_size(primal_size(base, steps), s, steps, max_triangles);
+  Stopwatch watch;
+  const SubdivMesh m = subdivide(base, primal(s.scheme), steps);
+  r.ms = watch.ms();
+  r.triangles = m.to_tri_mesh();
+  r.num_polygons = m.half_step() ? m.topo.num_edges() : m.topo.num_faces;
+  if (want_polygons) r.polygons = m.to_poly_mesh();
+  return r;
+}
+
+// The same criterion as `varmesh query` (hierarchy_cmds.cpp): --error and the camera combined with all_of.
+Criterion adaptive_criterion(const SubdivArgs& a) {
+  std::vector<Criterion> parts;
+  if (a.error >= 0.0f) {
+    if (!std::isfinite(a.error)) throw InvalidInput("--error must be finite");
+    parts.push_back(Criterion::object_error(a.error));
+  }
+  if (!a.camera.empty()) {
+    const auto c = parse_floats(a.camera, "--camera", 7);
+    Camera cam;
+    cam.eye = {c[0], c[1], c[2]};
+    cam.target = {c[3], c[4], c[5]};
+    cam.fov_y_deg = c[6];
+    if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
+    if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
+    if (!(a.pixels > 0.0f) || !(a.viewport > 0.0f)) throw InvalidInput("--pixels and --viewport must be > 0");
+    cam.z_near = 1e-4f * glm::length(cam.eye - cam.target);
+    cam.z_far = 1e7f;
+    parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
+                                       Criterion::screen_error(cam, a.viewport, a.pixels)}));
+  }
+  if (parts.empty()) throw InvalidInput("subdiv --adaptive: give --error E, --camera ..., or both");
+  return parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
+}
+
+// Pictures: one camera for every image of a run. It looks at the reference mesh (its referenced vertices)
+// from `--view` (default: the 3/4 view from above of default_camera_for, around `--up`) and stands as
+// close as it can with every vertex inside the frame.
+Camera picture_camera(const TriMesh& reference, const SubdivArgs& a, float aspect) {
+  Box3 box;
+  for (Index i : reference.indices) box.add(reference.positions[i]);
+  if (box.empty()) return default_camera_for(reference, aspect);
+  const glm::vec3 up = a.up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_vec3(a.up, "--up");
+  if (!(glm::length(up) > 0.0f)) throw InvalidInput("--up: the direction is zero");
+  glm::vec3 to_eye;
+  if (!a.view.empty()) {
+    to_eye = parse_vec3(a.view, "--view");
+    if (!(glm::length(to_eye) > 0.0f)) throw InvalidInput("--view: the direction is zero");
+  } else {
+    const glm::vec3 u = glm::normalize(up);
+    const glm::vec3 side = std::abs(u.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    const glm::vec3 x = glm::normalize(side - glm::dot(side, u) * u), y = glm::cross(u, x);
+    to_eye = 0.453f * x - 0.785f * y + 0.423f * u;  // elevation 25 degrees, azimuth -60 degrees
+  }
+  const float radius = std::max(0.5f * box.diagonal(), 1e-6f);
+  Camera cam = frame_sphere(box.center(), radius, -to_eye, 30.0f, aspect, up);  // checks, up fallback
+  const glm::vec3 f = glm::normalize(cam.target - cam.eye), r = glm::normalize(glm::cross(f, cam.up)),
+                  u = glm::cross(r, f);
+  // Centre the extent seen across the view, then move back until every vertex is inside (92% of the frame).
+  glm::vec2 lo(1e30f), hi(-1e30f);
+  for (Index i : reference.indices) {
+    const glm::vec3 q = reference.positions[i] - cam.target;
+    const glm::vec2 xy(glm::dot(q, r), glm::dot(q, u));
+    lo = glm::min(lo, xy);
+    hi = glm::max(hi, xy);
+  }
+  const glm::vec3 centre = cam.target + 0.5f * (lo.x + hi.x) * r + 0.5f * (lo.y + hi.y) * u;
+  const float ty = 0.92f * std::tan(glm::radians(0.5f * cam.fov_y_deg)), tx = ty * aspect;
+  float dist = 0.0f, zmin = 1e30f, zmax = -1e30f;
+  for (Index i : reference.indices) {
+    const glm::vec3 q = reference.positions[i] - centre;
+    const float z = -glm::dot(q, f);  // towards the eye
+    dist = std::max({dist, z + std::abs(glm::dot(q, r)) / tx, z + std::abs(glm::dot(q, u)) / ty});
+    zmin = std::min(zmin, z);
+    zmax = std::max(zmax, z);
+  }
+  cam.target = centre;
+  cam.eye = centre - f * dist;
+  cam.z_near = std::max(1e-3f * dist, 0.5f * (dist - zmax));
+  cam.z_far = 2.0f * (dist - zmin) + 1e-3f * dist;
+  return cam;
+}
+
+// Edges are drawn when the picture has at least this many pixels per polygon (denser wireframes turn it
+// black).
+constexpr int kPixelsPerWireFace = 40;
+
+// Flat shading (facets honest) with the polygon edges drawn on top, so quads show as quads.
+Image render_polygons(const PolyMesh& m, const Camera& cam, int width, int height) {
+  const TriMesh t = triangulate(m);
+  std::vector<Segment3> edges;
+  if (m.num_faces() * kPixelsPerWireFace <= std::size_t(width) * std::size_t(height)) {
+    edges.reserve(m.corners.size());
+    for (std::size_t f = 0; f < m.num_faces(); ++f) {
+      const auto c = m.face(f);
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const Index a = c[i], b = c[(i + 1) % c.size()];
+        edges.push_back({glm::vec3(m.positions[a]), glm::vec3(m.positions[b]), {0.08f, 0.08f, 0.1f}});
+      }
+    }
+  }
+  RenderOptions o;
+  o.width = width;
+  o.height = height;
+  o.smooth = false;
+  o.supersample = 2;
+  return render_mesh(t, cam, o, edges);
+}
+
+Image render_triangles(const TriMesh& m, const Camera& cam, int width, int height) {
+  RenderOptions o;
+  o.width = width;
+  o.height = height;
+  o.smooth = false;
+  o.supersample = 2;
+  o.wireframe = m.num_faces() * kPixelsPerWireFace <= 2 * std::size_t(width) * std::size_t(height);
+  return render_mesh(m, cam, o);
+}
+
+// Cells of equal size side by side, `columns` per row, separated by grey lines; missing cells stay white.
+Image grid_image(const std::vector<std::optional<Image>>& cells, std::size_t columns, std::size_t w, std::size_t h) {
+  constexpr std::size_t kGap = 4;
+  const std::size_t rows = (cells.size() + columns - 1) / columns;
+  Image out;
+  out.width = columns * w + (columns - 1) * kGap;
+  out.height = rows * h + (rows - 1) * kGap;
+  out.channels = 3;
+  out.pixels.assign(out.width * out.height * 3, 200);
+  for (std::size_t i = 0; i < rows * columns; ++i) {
+    const std::size_t x0 = (i % columns) * (w + kGap), y0 = (i / columns) * (h + kGap);
+    for (std::size_t y = 0; y < h; ++y) std::fill_n(&out.pixels[((y0 + y) * out.width + x0) * 3], w * 3, std::uint8_t{255});
+    if (i >= cells.size() || !cells[i]) continue;
+    const Image& c = *cells[i];
+    for (std::size_t y = 0; y < std::min(h, c.height); ++y)
+      std::copy_n(&c.pixels[y * c.width * 3], std::min(w, c.width) * 3, &out.pixels[((y0 + y) * out.width + x0) * 3]);
+  }
+  return out;
+}
+
+void check_output_paths(const SubdivArgs& a) {
+  if (a.output.empty()) throw InvalidInput("subdiv: give -o OUT (.obj, .ply, .off) or --figure DIR");
+  if (!is_mesh_file(a.output)) throw InvalidInput("subdiv: -o must end in .obj, .ply or .off, not '" + a.output + "'");
+  if (!a.png.empty() && fs::path(a.png).extension() != ".png") throw InvalidInput("subdiv: --png must end in .png, not '" + a.png + "'");
+}
+
+void check_limits(const SubdivArgs& a) {
+  if (a.max_triangles == 0 || a.max_triangles > SubdivArgs::kHardMaxTriangles)
+    throw InvalidInput("subdiv: --max-triangles must be in 1 .. 2^31");
+}
+
+int run_figure(const SubdivArgs& a) {
+  if (!a.output.empty() || !a.png.empty() || a.adaptive || !a.scheme.empty())
+    throw InvalidInput("subdiv --figure: runs every scheme and writes pictures only; drop -o, --png, --adaptive and --scheme");
+  const Input in = load_input(a.input);
+  constexpr int kW = 640, kH = 480;
+  const Camera cam = picture_camera(in.triangles, a, float(kW) / float(kH));
+  // Grid order: the quad input and the primal schemes, then the dual schemes and the triangle input with
+  // quasi48.
+  struct Cell {
+    std::string label;
+    std::optional<Scheme> scheme;  // none: an input
+  };
+  const std::vector<Cell> cells = {{"base", std::nullopt},           {"linear", Scheme::kLinear},
+                                   {"48", Scheme::kFourEight},        {"catmull-clark", Scheme::kCatmullClark},
+                                   {"zwart-powell", Scheme::kZwartPowell}, {"doo-sabin", Scheme::kDooSabin},
+                                   {"triangles", std::nullopt},      {"quasi48", Scheme::kQuasi48}};
+  std::vector<std::optional<Image>> images;
+  // The report goes out once everything has worked.
+  std::string report;
+  auto add = [&report](const char* fmt, auto... args) {
+    char line[512];
+    std::snprintf(line, sizeof line, fmt, args...);
+    report += line;
+  };
+  add("%s: %s\n", in.name.c_str(), in.description.c_str());
+  if (in.source != Input::Source::kTriangleFile) {
+    std::string quasi;
+    base_for(in, Scheme::kQuasi48, &quasi);
+    add("quasi48 input: %s\n", quasi.c_str());
+  }
+  add("%-14s %6s %10s %10s %10s %9s\n", "scheme", "steps", "vertices", "polygons", "triangles", "ms");
+  for (const Cell& c : cells) {
+    if (!c.scheme) {
+      images.push_back(c.label == "base" ? render_polygons(in.poly, cam, kW, kH) : render_triangles(in.triangles, cam, kW, kH));
+      continue;
+    }
+    const SchemeInfo& s = scheme_info(*c.scheme);
+    const int steps = steps_for(s, a);
+    if (s.dual && !dual_schemes_available()) {
+      add("%-14s %6d   skipped: the dual schemes are not built into this varmesh yet\n", s.name, steps);
+      images.emplace_back();
+      continue;
+    }
+    std::string unused;
+    const Result r = run_uniform(base_for(in, s.scheme, &unused), s, steps, a.max_triangles, true);
+    add("%-14s %6d %10zu %10zu %10zu %9.2f\n", s.name, steps, r.triangles.num_vertices(), r.num_polygons,
+        r.triangles.num_faces(), r.ms);
+    images.push_back(render_polygons(r.polygons, cam, kW, kH));
+  }
+  std::error_code ec;
+  fs::create_directories(a.figure, ec);
+  if (ec) throw IoError(a.figure, "cannot create the figure folder: " + ec.message());
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (!images[i]) continue;
+    const std::string path = (fs::path(a.figure) / (in.name + "_" + cells[i].label + ".png")).string();
+    write_png(path, *images[i]);
+    add("  %s\n", path.c_str());
+  }
+  const std::string grid = (fs::path(a.figure) / (in.name + "_grid.png")).string();
+  write_png(grid, grid_image(images, 4, kW, kH));
+  add("  %s (top: base, linear, 48, catmull-clark; bottom: zwart-powell, doo-sabin, triangles, quasi48)\n", grid.c_str());
+  std::fputs(report.c_str(), stdout);
+  return 0;
+}
+
+}  // namespace
+
+bool dual_schemes_available() noexcept { return kDualSchemesBuilt; }
+
+void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
+  sub.add_option("INPUT", a.input,
+                 "mesh (.obj/.off/.ply) or cube | torus (quad meshes). A file with polygons keeps its quads (the "
+                 "readers fan-triangulate polygons; subdiv rebuilds the quads from the fans; larger polygons come "
+                 "back as quads and a triangle); a file of triangles only is paired into quads by a maximum "
+                 "matching of its dual graph (unpaired triangles stay triangles)")
+      ->required();
+  sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off), as triangles");
+  sub.add_option("--scheme", a.scheme,
+                 "48 (4-8, Velho-Zorin; default) | catmull-clark | linear (4-8 refinement, no smoothing) | "
+                 "zwart-powell | doo-sabin | quasi48: the 4-8 rules on the input's triangles paired into quads, our "
+                 "stand-in for Velho's quasi 4-8 subdivision (its pairing, not its smoothing rules); on a triangle "
+                 "file it equals 48, on a polygon file or cube/torus it re-pairs their triangulation");
+  sub.add_option("--levels", a.levels,
+                 "dyadic levels (faces x4 each): 2 binary 4-8 steps (48, catmull-clark, linear, quasi48), "
+                 "2 Zwart-Powell steps, 1 Doo-Sabin step");
+  sub.add_option("--steps", a.steps, "elementary steps instead: binary 4-8 steps (odd allowed), Zwart-Powell or Doo-Sabin steps");
+  sub.add_flag("--adaptive", a.adaptive,
+               "build the Multi-Triangulation of the binary steps and extract a front (primal schemes)");
+  sub.add_option("--error", a.error, "with --adaptive: largest node error (object units; 0 = refine wherever anything moves)");
+  sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
+  sub.add_option("--png", a.png, "also render the result to this PNG (flat shading, polygon edges)");
+  sub.add_option("--figure", a.figure,
+                 "write every scheme on INPUT into this folder (one PNG each, same camera, plus a grid): "
+                 "instead of -o");
+  sub.add_option("--view", a.view, "pictures: x,y,z direction from the model towards the eye");
+  sub.add_option("--up", a.up, "pictures: x,y,z up axis (default 0,0,1)");
+  sub.add_option("--max-triangles", a.max_triangles,
+                 "refuse results with more triangles or vertices, checked before running (default 2^25, about 2.7 GB "
+                 "at the peak; at most 2^31); --adaptive stores every level: it refuses 8 times fewer");
+}
+
+int run_subdiv(const SubdivArgs& a) {
+  check_limits(a);
+  if (!a.adaptive && (a.error >= 0.0f || !a.camera.empty())) throw InvalidInput("subdiv: --error and --camera need --adaptive");
+  if (!a.figure.empty()) return run_figure(a);
+  check_output_paths(a);
+  const SchemeInfo& s = parse_scheme(a.scheme);
+  const int steps = steps_for(s, a);
+  if (a.adaptive && s.dual) throw InvalidInput("subdiv --adaptive: needs a primal scheme (48, catmull-clark, linear, quasi48), not " + std::string(s.name));
+  const std::optional<Criterion> criterion = a.adaptive ? std::optional<Criterion>(adaptive_criterion(a)) : std::nullopt;
+  const Input in = load_input(a.input);
+  std::string description;
+  const PolyMesh base = base_for(in, s.scheme, &description);
+  // The report goes out once everything has worked (an error is then the only thing printed).
+  const std::string report = "input " + in.name + ": " + description;
+  char line[512];
+
+  TriMesh out;
+  PolyMesh picture;  // uniform runs: the polygons, drawn with their edges
+  if (a.adaptive) {
+    check_size(primal_size(base, steps), s, steps, a.max_triangles, true);
+    SubdivMtInfo info;
+    Stopwatch build_watch;
+    const Mt mt = build_subdivision_mt(base, primal(s.scheme), steps, &info);
+    const double build_ms = build_watch.ms();
+    Query q;
+    q.criterion = *criterion;
+    MtFront front(mt);
+    Stopwatch watch;
+    const QueryStats st = extract(front, q);
+    const double ms = watch.ms();
+    out = front.to_mesh();
+    std::snprintf(line, sizeof line,
+                  "%s, %d binary steps, adaptive: %zu nodes built in %.1f ms; front %zu vertices, %zu triangles of "
+                  "%zu uniform (%zu nodes refined) in %.2f ms",
+                  s.title, steps, mt.num_nodes(), build_ms, out.num_vertices(), out.num_faces(), info.uniform_faces,
+                  st.refined, ms);
+  } else {
+    Result r = run_uniform(base, s, steps, a.max_triangles, !a.png.empty());
+    out = std::move(r.triangles);
+    picture = std::move(r.polygons);
+    std::snprintf(line, sizeof line, "%s, %d %s: %zu vertices, %zu faces -> %zu vertices, %zu polygons, %zu triangles in %.2f ms",
+                  s.title, steps, s.dual ? "steps" : "binary steps", base.num_vertices(), base.num_faces(),
+                  out.num_vertices(), r.num_polygons, out.num_faces(), r.ms);
+  }
+  std::optional<Image> image;
+  if (!a.png.empty()) {
+    const Camera cam = picture_camera(out, a, 4.0f / 3.0f);
+    image = a.adaptive ? render_triangles(out, cam, 1024, 768) : render_polygons(picture, cam, 1024, 768);
+  }
+  write_mesh(a.output, out);
+  if (image) {
+    try {
+      write_png(a.png, *image);
+    } catch (...) {
+      std::error_code ec;
+      fs::remove(a.output, ec);  // no partial output: both files or neither
+      throw;
+    }
+  }
+  std::printf("%s\n%s\n-> %s%s%s\n", report.c_str(), line, a.output.c_str(), image ? ", " : "", a.png.c_str());
+  return 0;
+}
+
+}  // namespace varmesh::app
