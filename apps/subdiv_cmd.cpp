@@ -38,11 +38,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// fourk/subdiv_dual.cpp is not yet compiled into varmesh::fourk (only into test_subdiv_dual). When it is,
-// set this to true: run_dual() below is the only code that calls into it, and a discarded `if constexpr`
-// branch needs no definition at link time (C++17 [basic.def.odr]).
-constexpr bool kDualSchemesBuilt = false;
-
 enum class Scheme { kFourEight, kZwartPowell, kCatmullClark, kDooSabin, kQuasi48, kLinear };
 
 struct SchemeInfo {
@@ -248,17 +243,11 @@ void check_size(const Size& size, const SchemeInfo& s, int steps, std::uint64_t 
 }
 
 PolyMesh run_dual(const PolyMesh& base, const SchemeInfo& s, int steps, std::uint64_t max_triangles) {
-  if constexpr (kDualSchemesBuilt) {
-    const DualScheme d = s.scheme == Scheme::kZwartPowell ? DualScheme::kZwartPowell : DualScheme::kDooSabin;
-    const DualMeshSize ds = dual_mesh_size(base, d, steps);
-    const std::uint64_t tris = ds.corners == UINT64_MAX ? kSaturated : ds.corners - 2 * ds.faces;
-    check_size({ds.vertices, ds.faces, tris}, s, steps, max_triangles);
-    return subdivide_dual(base, d, steps);
-  } else {
-    (void)base, (void)steps, (void)max_triangles;
-    throw InvalidInput("subdiv: --scheme " + std::string(s.name) +
-                       ": the dual schemes (fourk/subdiv_dual.cpp) are not built into this varmesh yet");
-  }
+  const DualScheme d = s.scheme == Scheme::kZwartPowell ? DualScheme::kZwartPowell : DualScheme::kDooSabin;
+  const DualMeshSize ds = dual_mesh_size(base, d, steps);
+  const std::uint64_t tris = ds.corners == UINT64_MAX ? kSaturated : ds.corners - 2 * ds.faces;
+  check_size({ds.vertices, ds.faces, tris}, s, steps, max_triangles);
+  return subdivide_dual(base, d, steps);
 }
 
 // A uniform result: the output triangles and, for pictures, the polygons.
@@ -468,11 +457,6 @@ int run_figure(const SubdivArgs& a) {
     }
     const SchemeInfo& s = scheme_info(*c.scheme);
     const int steps = steps_for(s, a);
-    if (s.dual && !dual_schemes_available()) {
-      add("%-14s %6d   skipped: the dual schemes are not built into this varmesh yet\n", s.name, steps);
-      images.emplace_back();
-      continue;
-    }
     std::string unused;
     const Result r = run_uniform(base_for(in, s.scheme, &unused), s, steps, a.max_triangles, true);
     add("%-14s %6d %10zu %10zu %10zu %9.2f\n", s.name, steps, r.triangles.num_vertices(), r.num_polygons,
@@ -497,7 +481,6 @@ int run_figure(const SubdivArgs& a) {
 
 }  // namespace
 
-bool dual_schemes_available() noexcept { return kDualSchemesBuilt; }
 
 void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
   sub.add_option("INPUT", a.input,

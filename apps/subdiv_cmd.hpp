@@ -38,8 +38,4 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& args);
 /// prints them on one line); nothing is written unless everything before the writes succeeded.
 int run_subdiv(const SubdivArgs& args);
 
-/// False while fourk/subdiv_dual.cpp is not compiled into varmesh::fourk: the zwart-powell and doo-sabin
-/// schemes then fail with a one-line error (and --figure leaves their cells empty).
-bool dual_schemes_available() noexcept;
-
 }  // namespace varmesh::app

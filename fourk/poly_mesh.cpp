@@ -45,8 +45,8 @@ void PolyMesh::validate() const {
   directed.reserve(corners.size() * 2);
   std::vector<Index> corners_at(nv, 0);
   for (std::size_t f = 0; f < nf; ++f) {
-    if (face_offsets[f + 1] < face_offsets[f])
-      throw InvalidInput("polygon mesh: face_offsets decrease at face " + std::to_string(f), f);
+    if (face_offsets[f + 1] < face_offsets[f] || face_offsets[f + 1] > corners.size())
+      throw InvalidInput("polygon mesh: face_offsets decrease or run past the corners at face " + std::to_string(f), f);
     const std::size_t k = face_size(f);
     if (k < 3) throw InvalidInput("polygon mesh: face " + std::to_string(f) + " has fewer than 3 corners", f);
     const auto fc = face(f);

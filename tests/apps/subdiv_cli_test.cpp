@@ -192,13 +192,6 @@ TEST(SubdivCli, DualSchemesOnTheCube) {
     const std::string out = (dir / "d.obj").string();
     fs::remove(out);
     const CmdResult r = run(std::string("cube ") + c.args + " -o " + out, dir);
-    if (!app::dual_schemes_available()) {
-      EXPECT_EQ(r.status, 1) << c.args;
-      EXPECT_EQ(count_lines(r.err), 1) << r.err;
-      EXPECT_NE(r.err.find("not built"), std::string::npos) << r.err;
-      EXPECT_FALSE(fs::exists(out));
-      continue;
-    }
     ASSERT_EQ(r.status, 0) << c.args << "\n" << r.err;
     const TriMesh m = read_mesh(out);
     EXPECT_NO_THROW(m.validate());
@@ -303,8 +296,8 @@ TEST(SubdivCli, FigureDrawsEverySchemeWithOneCamera) {
   const fs::path fig = dir / "fig";
   const CmdResult r = run("cube --levels 2 --figure " + fig.string(), dir);
   ASSERT_EQ(r.status, 0) << r.err;
-  std::vector<std::string> labels = {"base", "triangles", "linear", "48", "catmull-clark", "quasi48"};
-  if (app::dual_schemes_available()) labels.insert(labels.end(), {"zwart-powell", "doo-sabin"});
+  const std::vector<std::string> labels = {"base",          "triangles", "linear",       "48",
+                                           "catmull-clark", "quasi48",   "zwart-powell", "doo-sabin"};
   for (const std::string& label : labels) {
     const fs::path p = fig / ("cube_" + label + ".png");
     ASSERT_TRUE(fs::exists(p)) << p;
