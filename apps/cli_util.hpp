@@ -7,11 +7,19 @@
 
 #include <glm/vec3.hpp>
 
+#include "multitri/query.hpp"
+
 namespace varmesh::app {
 
 /// Parses comma-separated numbers; throws InvalidInput naming the option on a bad list or count.
 std::vector<float> parse_floats(const std::string& text, const std::string& option, std::size_t count);
 glm::vec3 parse_vec3(const std::string& text, const std::string& option);
+
+/// The criteria of `--error E` (E >= 0 given; object units) and `--camera ex,ey,ez,tx,ty,tz,fov` (non-empty:
+/// frustum, back faces and `pixels` of screen-space error on a `viewport`-pixel-high image), appended to
+/// `parts`. Throws InvalidInput naming the option on a non-finite error, a bad camera or non-positive sizes.
+void add_error_and_camera_criteria(float error, const std::string& camera, float pixels, float viewport,
+                                   std::vector<Criterion>& parts);
 
 /// Wall-clock stopwatch in milliseconds.
 class Stopwatch {

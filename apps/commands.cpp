@@ -51,6 +51,28 @@ glm::vec3 parse_vec3(const std::string& text, const std::string& option) {
   return {v[0], v[1], v[2]};
 }
 
+void add_error_and_camera_criteria(float error, const std::string& camera, float pixels, float viewport,
+                                   std::vector<Criterion>& parts) {
+  if (error >= 0.0f) {
+    if (!std::isfinite(error)) throw InvalidInput("--error must be finite");
+    parts.push_back(Criterion::object_error(error));
+  }
+  if (camera.empty()) return;
+  const auto c = parse_floats(camera, "--camera", 7);
+  Camera cam;
+  cam.eye = {c[0], c[1], c[2]};
+  cam.target = {c[3], c[4], c[5]};
+  cam.fov_y_deg = c[6];
+  if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f))
+    throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
+  if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
+  if (!(pixels > 0.0f) || !(viewport > 0.0f)) throw InvalidInput("--pixels and --viewport must be > 0");
+  cam.z_near = 1e-4f * glm::length(cam.eye - cam.target);
+  cam.z_far = 1e7f;
+  parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
+                                     Criterion::screen_error(cam, viewport, pixels)}));
+}
+
 Step::Step(const char* what, bool quiet) : what_(what), quiet_(quiet) {
   if (!quiet_) std::fprintf(stderr, "[varmesh] %s ...\n", what_);
 }

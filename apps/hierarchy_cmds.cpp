@@ -195,24 +195,7 @@ int run_query(const QueryArgs& a) {
     throw InvalidInput("query: give --error E, --camera ..., --ramp ... or --budget N");
   const Mt mt = read_mt(a.input);
   std::vector<Criterion> parts;
-  if (a.error >= 0.0f) {
-    if (!std::isfinite(a.error)) throw InvalidInput("--error must be finite");
-    parts.push_back(Criterion::object_error(a.error));
-  }
-  if (!a.camera.empty()) {
-    const auto c = parse_floats(a.camera, "--camera", 7);
-    Camera cam;
-    cam.eye = {c[0], c[1], c[2]};
-    cam.target = {c[3], c[4], c[5]};
-    cam.fov_y_deg = c[6];
-    if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
-    if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
-    if (!(a.pixels > 0.0f) || !(a.viewport > 0.0f)) throw InvalidInput("--pixels and --viewport must be > 0");
-    cam.z_near = 1e-4f * glm::length(cam.eye - cam.target);
-    cam.z_far = 1e7f;
-    parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
-                                       Criterion::screen_error(cam, a.viewport, a.pixels)}));
-  }
+  add_error_and_camera_criteria(a.error, a.camera, a.pixels, a.viewport, parts);
   if (!a.ramp.empty()) {
     const auto r = parse_floats(a.ramp, "--ramp", 8);
     const glm::vec3 p0{r[0], r[1], r[2]}, p1{r[3], r[4], r[5]};

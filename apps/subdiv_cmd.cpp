@@ -282,24 +282,7 @@ Result run_uniform(const PolyMesh& base, const SchemeInfo& s, int steps, std::ui
 // The same criterion as `varmesh query` (hierarchy_cmds.cpp): --error and the camera combined with all_of.
 Criterion adaptive_criterion(const SubdivArgs& a) {
   std::vector<Criterion> parts;
-  if (a.error >= 0.0f) {
-    if (!std::isfinite(a.error)) throw InvalidInput("--error must be finite");
-    parts.push_back(Criterion::object_error(a.error));
-  }
-  if (!a.camera.empty()) {
-    const auto c = parse_floats(a.camera, "--camera", 7);
-    Camera cam;
-    cam.eye = {c[0], c[1], c[2]};
-    cam.target = {c[3], c[4], c[5]};
-    cam.fov_y_deg = c[6];
-    if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
-    if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
-    if (!(a.pixels > 0.0f) || !(a.viewport > 0.0f)) throw InvalidInput("--pixels and --viewport must be > 0");
-    cam.z_near = 1e-4f * glm::length(cam.eye - cam.target);
-    cam.z_far = 1e7f;
-    parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
-                                       Criterion::screen_error(cam, a.viewport, a.pixels)}));
-  }
+  add_error_and_camera_criteria(a.error, a.camera, a.pixels, a.viewport, parts);
   if (parts.empty()) throw InvalidInput("subdiv --adaptive: give --error E, --camera ..., or both");
   return parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
 }
