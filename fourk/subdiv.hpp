@@ -14,9 +14,10 @@
 /// points. Seen on the quad mesh alone, each binary step turns faces into edges (the new faces are the old
 /// edges): the topology of sqrt(2) subdivision (Li, Ma, Bao 2004).
 ///
-/// Numbering (as OpenSubdiv's Far::TopologyRefiner with its default vertex order): after a quadrisection
-/// of a level with V vertices, F faces and E edges, vertex v keeps its index, face f's point is V + f and
-/// edge e's point is V + F + e. Child faces of face f with k corners are offset(f) + i, i < k, where
+/// Numbering: after a quadrisection of a level with V vertices, F faces and E edges, vertex v keeps its
+/// index, face f's point is V + f and edge e's point is V + F + e. OpenSubdiv's Far::TopologyRefiner orders
+/// child vertices in the same blocks, but numbers child edges and child faces differently from level 2 on,
+/// so only level 1 coincides index for index (tests/fourk/subdiv_osd_test.cpp maps the two level by level). Child faces of face f with k corners are offset(f) + i, i < k, where
 /// offset(f) = sum of the sizes of the faces before f; child face offset(f) + i = (c_i, e_i, f, e_{i-1}),
 /// e_i = the edge c_i -> c_{i+1}. A vertex therefore has one index at every level from its creation on.
 ///

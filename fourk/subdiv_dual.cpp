@@ -19,7 +19,9 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <unordered_map>
 
+#include "fourk/subdiv.hpp"
 #include "multitri/errors.hpp"
 
 namespace varmesh {
@@ -506,6 +508,45 @@ PolyMesh subdivide_dual(const PolyMesh& base, DualScheme scheme, int steps) {
   for (int s = 1; s < steps; ++s) {
     t = build_topology(out, "subdivide_dual");
     out = step(out, t, scheme, "subdivide_dual");
+  }
+  return out;
+}
+
+
+PolyMesh doo_sabin_by_four_eight_steps(const PolyMesh& base) {
+  // Three binary steps of linear 4-8 refinement: level-1 vertices, then one point per level-1 quad.
+  const SubdivMesh m = subdivide(base, SubdivScheme::kLinear, 3);
+  const SubdivTopology& t = m.topo;
+  const auto nv = static_cast<Index>(t.num_vertices);
+  for (Index v = 0; v < nv; ++v)
+    if (t.vertex_border[v])
+      throw InvalidInput("doo_sabin_by_four_eight_steps: the mesh has a border (level-1 vertex " + std::to_string(v) +
+                             "); only closed meshes",
+                         v);
+  PolyMesh out;
+  out.positions.assign(m.positions.begin() + nv, m.positions.end());
+  // Directed edge a -> b of a level-1 quad -> the corner slot of a in it.
+  std::unordered_map<std::uint64_t, Index> slot_of;
+  slot_of.reserve(t.face_verts.size());
+  for (Index s = 0; s < t.face_verts.size(); ++s) {
+    const Index a = t.face_verts[s], b = t.face_verts[(s & ~3u) | ((s + 1) & 3u)];
+    slot_of.emplace((std::uint64_t{a} << 32) | b, s);
+  }
+  std::vector<Index> first_slot(nv, kInvalid);
+  for (Index s = 0; s < t.face_verts.size(); ++s)
+    if (first_slot[t.face_verts[s]] == kInvalid) first_slot[t.face_verts[s]] = s;
+  std::vector<Index> ring;
+  for (Index u = 0; u < nv; ++u) {
+    if (first_slot[u] == kInvalid || t.valence[u] < 3) continue;
+    // Counter-clockwise around u: from the quad with corner u, p before u, to the quad holding u -> p.
+    ring.clear();
+    Index s = first_slot[u];
+    do {
+      ring.push_back(s / 4);
+      const Index p = t.face_verts[(s & ~3u) | ((s + 3) & 3u)];
+      s = slot_of.at((std::uint64_t{u} << 32) | p);
+    } while (s != first_slot[u] && ring.size() <= t.valence[u]);
+    out.add_face(ring);
   }
   return out;
 }

@@ -107,4 +107,15 @@ DualMeshSize dual_mesh_size(const PolyMesh& base, DualScheme scheme, int steps);
 /// consecutive levels plus the edge table of the larger input.
 PolyMesh subdivide_dual(const PolyMesh& base, DualScheme scheme, int steps);
 
+/// One Doo-Sabin step made of binary 4-8 steps (subdiv.hpp): a linear diagonal step, a linear edge step and
+/// a linear diagonal step on the resulting quads (whose new vertex is the average of its block's corners
+/// v, m1, F, m2), then the dual of that quad mesh: its vertices are those last face points, its faces one
+/// per vertex of the quad mesh (an old vertex, an old face's point, an old edge's point), ordered around it.
+/// On a closed quad mesh this is doo_sabin_step() up to the numbering (tests compare the two face for face);
+/// at other faces the corner weights are the 4-8 average of the header, not the classic ones. Closed meshes
+/// only: throws InvalidInput naming the border vertex otherwise, and as PolyMesh::validate(). Output
+/// numbering: vertex q = the point of level-1 quad q (subdiv.hpp numbering); faces in level-1 vertex order,
+/// skipping vertices with fewer than 3 faces.
+PolyMesh doo_sabin_by_four_eight_steps(const PolyMesh& base);
+
 }  // namespace varmesh

@@ -366,6 +366,41 @@ TEST(DooSabin, QuadCornerIsTheFourEightAverage) {
   }
 }
 
+// Doo-Sabin as binary 4-8 steps (linear diagonal, linear edge, diagonal with the 4-corner average, then the
+// dual) equals the classic step on closed quad meshes, face for face (faces compared as cyclic sequences of
+// positions); elsewhere it is rejected (borders) or differs only in the corner weights (triangles).
+TEST(DooSabin, FourEightStepsGiveTheClassicStepOnQuads) {
+  for (const PolyMesh& in : {jittered(make_quad_cube(), 5, 0.3), jittered(make_quad_torus(6, 5), 6, 0.1)}) {
+    const PolyMesh classic = doo_sabin_step(in);
+    const PolyMesh by48 = doo_sabin_by_four_eight_steps(in);
+    ASSERT_NO_THROW(by48.validate());
+    ASSERT_EQ(by48.num_vertices(), classic.num_vertices());
+    ASSERT_EQ(by48.num_faces(), classic.num_faces());
+    // Map each by48 vertex to the classic vertex at the same place (all corner points are distinct).
+    std::vector<Index> to_classic(by48.num_vertices(), kInvalid);
+    for (std::size_t v = 0; v < by48.num_vertices(); ++v)
+      for (std::size_t w = 0; w < classic.num_vertices(); ++w)
+        if (glm::distance(by48.positions[v], classic.positions[w]) < 1e-12) to_classic[v] = static_cast<Index>(w);
+    for (Index w : to_classic) ASSERT_NE(w, kInvalid);
+    auto canonical = [](std::vector<Index> f) {
+      std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+      return f;
+    };
+    std::multiset<std::vector<Index>> a, b;
+    for (std::size_t f = 0; f < by48.num_faces(); ++f) {
+      std::vector<Index> face;
+      for (Index v : by48.face(f)) face.push_back(to_classic[v]);
+      a.insert(canonical(face));
+    }
+    for (std::size_t f = 0; f < classic.num_faces(); ++f) {
+      const auto fc = classic.face(f);
+      b.insert(canonical(std::vector<Index>(fc.begin(), fc.end())));
+    }
+    EXPECT_EQ(a, b);
+  }
+  EXPECT_THROW(doo_sabin_by_four_eight_steps(open_grid(3, 3, 1)), InvalidInput);
+}
+
 // Every polygon: the weights of Doo and Sabin (1978) written out per pair of corners.
 TEST(DooSabin, ClassicWeightsOnEveryPolygon) {
   for (const int n : {3, 5, 6, 9}) {
