@@ -33,6 +33,8 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
   sub.add_option("--tolerance", a.tolerance, "adaptive: geometric tolerance (default 1% of the bounding-box diagonal)");
   sub.add_option("--raw-size", a.raw_size, "W,H of a .raw float32 height field");
   sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder");
+  sub.add_option("--up", a.up, "pictures: x,y,z up axis (default 0,0,1)");
+  sub.add_option("--view", a.view, "pictures: x,y,z direction from the model towards the eye");
   sub.add_flag("--quiet", a.quiet, "no progress on stderr");
 }
 
@@ -46,6 +48,8 @@ void add_query_options(CLI::App& sub, QueryArgs& a) {
   sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
   sub.add_option("--budget", a.budget, "triangle budget");
   sub.add_option("--png", a.png, "also render the result to this PNG");
+  sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");
+  sub.add_option("--view", a.view, "--png: x,y,z direction from the model towards the eye");
 }
 
 namespace {
@@ -89,6 +93,15 @@ void print_metrics(const Mt& mt) {
   std::printf("hierarchy: %zu nodes, %zu faces (%zu coarsest, %zu finest), %zu vertices, depth %zu, growth %.3f, %.1f bytes per finest face\n",
               m.nodes, m.faces, m.coarsest_faces, m.finest_faces, mt.num_vertices(), m.depth, m.growth_rate,
               double(mt.memory_bytes()) / double(std::max<std::size_t>(1, m.finest_faces)));
+}
+
+// The pictures' camera: the default 3/4 view, or picture_camera_for when --up or --view is given.
+Camera chosen_camera(const TriMesh& reference, const std::string& up, const std::string& view) {
+  if (up.empty() && view.empty()) return default_camera_for(reference, 4.0f / 3.0f);
+  const glm::vec3 u = up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_vec3(up, "--up");
+  const glm::vec3 v = view.empty() ? glm::vec3(0.0f) : parse_vec3(view, "--view");
+  if (!view.empty() && !(glm::length(v) > 0.0f)) throw InvalidInput("--view: the direction is zero");
+  return picture_camera_for(reference, u, v, 4.0f / 3.0f);
 }
 
 void write_level_picture(const std::string& dir, const std::string& name, const TriMesh& mesh, const Camera& cam) {
@@ -148,7 +161,7 @@ int run_build(const BuildArgs& a) {
                 base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, levels);
     if (!a.pictures.empty()) {
       prepare_picture_dir(a.pictures);
-      const Camera cam = default_camera_for(base, 4.0f / 3.0f);
+      const Camera cam = chosen_camera(base, a.up, a.view);
       MtFront front(mt);
       std::vector<NodeId> by_level;
       for (int level = 0; level <= levels; ++level) {
@@ -169,7 +182,7 @@ int run_build(const BuildArgs& a) {
     std::printf("\n");
     if (!a.pictures.empty()) {
       prepare_picture_dir(a.pictures);
-      const Camera cam = default_camera_for(input, 4.0f / 3.0f);
+      const Camera cam = chosen_camera(input, a.up, a.view);
       // The levels nearest to the face counts of Velho-Gomes Figure 21, plus the input.
       std::vector<std::size_t> levels{0};
       for (std::size_t target : {1200u, 700u, 400u, 300u, 200u}) levels.push_back(simplify4k_closest_level(r, target));
@@ -228,7 +241,7 @@ int run_query(const QueryArgs& a) {
     o.width = 1024;
     o.height = 768;
     o.wireframe = mesh.num_faces() < 60000;
-    write_png(a.png, render_mesh(mesh, default_camera_for(mesh, 4.0f / 3.0f), o));
+    write_png(a.png, render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o));
   }
   return 0;
 }

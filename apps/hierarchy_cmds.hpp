@@ -16,6 +16,7 @@ struct BuildArgs {
   float tolerance = -1.0f;     ///< adaptive: geometric tolerance (default: 1% of the bounding-box diagonal)
   std::string raw_size;        ///< adaptive on a .raw height field
   std::string pictures;        ///< folder for PNGs of the levels (semiregular, simplify4k) or the result (adaptive)
+  std::string up, view;        ///< pictures: "x,y,z" up axis and direction towards the eye (empty: defaults)
   bool quiet = false;
 };
 struct QueryArgs {
@@ -25,6 +26,7 @@ struct QueryArgs {
   float pixels = 1.0f, viewport = 1080.0f;
   std::string ramp;       ///< x0,y0,z0,x1,y1,z1,size0,size1
   std::size_t budget = 0;
+  std::string up, view;   ///< --png: "x,y,z" up axis and direction towards the eye (empty: defaults)
 };
 
 void add_build_options(CLI::App& sub, BuildArgs& args);

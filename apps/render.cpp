@@ -546,4 +546,46 @@ Camera default_camera_for(const TriMesh& mesh, float aspect) {
   return frame_sphere(center, radius, -to_eye, 40.0f, aspect);
 }
 
+
+Camera picture_camera_for(const TriMesh& reference, const glm::vec3& up, const glm::vec3& view, float aspect) {
+  Box3 box;
+  for (Index i : reference.indices) box.add(reference.positions[i]);
+  if (box.empty()) return default_camera_for(reference, aspect);
+  if (!(glm::length(up) > 0.0f)) throw InvalidInput("--up: the direction is zero");
+  glm::vec3 to_eye = view;
+  if (!(glm::length(to_eye) > 0.0f)) {
+    const glm::vec3 u = glm::normalize(up);
+    const glm::vec3 side = std::abs(u.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    const glm::vec3 x = glm::normalize(side - glm::dot(side, u) * u), y = glm::cross(u, x);
+    to_eye = 0.453f * x - 0.785f * y + 0.423f * u;  // elevation 25 degrees, azimuth -60 degrees
+  }
+  const float radius = std::max(0.5f * box.diagonal(), 1e-6f);
+  Camera cam = frame_sphere(box.center(), radius, -to_eye, 30.0f, aspect, up);  // checks, up fallback
+  const glm::vec3 f = glm::normalize(cam.target - cam.eye), r = glm::normalize(glm::cross(f, cam.up)),
+                  u = glm::cross(r, f);
+  // Centre the extent seen across the view, then move back until every vertex is inside (92% of the frame).
+  glm::vec2 lo(1e30f), hi(-1e30f);
+  for (Index i : reference.indices) {
+    const glm::vec3 q = reference.positions[i] - cam.target;
+    const glm::vec2 xy(glm::dot(q, r), glm::dot(q, u));
+    lo = glm::min(lo, xy);
+    hi = glm::max(hi, xy);
+  }
+  const glm::vec3 centre = cam.target + 0.5f * (lo.x + hi.x) * r + 0.5f * (lo.y + hi.y) * u;
+  const float ty = 0.92f * std::tan(glm::radians(0.5f * cam.fov_y_deg)), tx = ty * aspect;
+  float dist = 0.0f, zmin = 1e30f, zmax = -1e30f;
+  for (Index i : reference.indices) {
+    const glm::vec3 q = reference.positions[i] - centre;
+    const float z = -glm::dot(q, f);  // towards the eye
+    dist = std::max({dist, z + std::abs(glm::dot(q, r)) / tx, z + std::abs(glm::dot(q, u)) / ty});
+    zmin = std::min(zmin, z);
+    zmax = std::max(zmax, z);
+  }
+  cam.target = centre;
+  cam.eye = centre - f * dist;
+  cam.z_near = std::max(1e-3f * dist, 0.5f * (dist - zmax));
+  cam.z_far = 2.0f * (dist - zmin) + 1e-3f * dist;
+  return cam;
+}
+
 }  // namespace varmesh
