@@ -232,17 +232,20 @@ int run_query(const QueryArgs& a) {
   const QueryStats st = extract(front, q);
   const double ms = watch.ms();
   const TriMesh mesh = front.to_mesh();
-  write_mesh(a.output, mesh);
-  std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
-              st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  // The picture is rendered before anything is written, so a bad --png, --up or --view leaves no file.
+  Image picture;
   if (!a.png.empty()) {
     if (std::filesystem::path(a.png).extension() != ".png") throw InvalidInput("--png must end in .png");
     RenderOptions o;
     o.width = 1024;
     o.height = 768;
     o.wireframe = mesh.num_faces() < 60000;
-    write_png(a.png, render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o));
+    picture = render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o);
   }
+  write_mesh(a.output, mesh);
+  std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
+              st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  if (!a.png.empty()) write_png(a.png, picture);
   return 0;
 }
 

@@ -156,6 +156,25 @@ TEST(Cli, BuildThenQueryAdaptiveTorus) {
   EXPECT_GT(left, right);
 }
 
+TEST(Cli, QueryPictureCameraOptions) {
+  const auto dir = testing::scratch_dir("cli_query_up");
+  CmdResult r = run("build torus --method adaptive -o " + (dir / "t.vrm").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string base = "query " + (dir / "t.vrm").string() + " --error 0 -o " + (dir / "m.obj").string();
+  r = run(base + " --png " + (dir / "up.png").string() + " --up 0,1,0 --view 0,0,1", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Image img = read_png((dir / "up.png").string());
+  EXPECT_EQ(img.width, 1024u);
+  // A zero up axis or view direction, or a malformed one, fails and writes no file at all.
+  for (const char* bad : {" --up 0,0,0", " --view 0,0,0", " --up 1,2"}) {
+    const auto png = dir / "bad.png", obj = dir / "bad.obj";
+    r = run("query " + (dir / "t.vrm").string() + " --error 0 -o " + obj.string() + " --png " + png.string() + bad, dir);
+    EXPECT_EQ(r.status, 1) << bad;
+    EXPECT_FALSE(std::filesystem::exists(png)) << bad;
+    EXPECT_FALSE(std::filesystem::exists(obj)) << bad;
+  }
+}
+
 TEST(Cli, BuildAndQueryFailCleanly) {
   const auto dir = testing::scratch_dir("cli_build_bad");
   CmdResult r = run("build torus --method nonsense -o " + (dir / "x.vrm").string(), dir);
