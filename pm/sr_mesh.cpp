@@ -48,7 +48,12 @@ void SrMesh::reset() {
   std::fill(adj_.begin(), adj_.end(), kInvalid);
   std::fill(vface_.begin(), vface_.end(), kInvalid);
   std::fill(state_.begin(), state_.end(), std::uint8_t{0});
-  for (Index r : h_->roots()) state_[r] = 1;
+  active_list_.clear();
+  active_pos_.assign(h_->num_nodes(), kInvalid);
+  for (Index r : h_->roots()) {
+    state_[r] = 1;
+    activate(r);
+  }
   num_active_ = h_->num_roots();
   num_faces_ = 0;
   // Root of each leaf: nodes are numbered children first, so propagate from the top down.
@@ -179,6 +184,9 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, bool closed) {
   vface_[vs] = kInvalid;
   state_[vs] = 2;
   state_[r.vt] = state_[r.vu] = 1;
+  deactivate(vs);
+  activate(r.vt);
+  activate(r.vu);
   ++num_active_;
   ++stats_.vsplits;
   report(vs);
@@ -217,6 +225,9 @@ void SrMesh::do_ecol(Index vs) {
   vface_[r.vt] = vface_[r.vu] = kInvalid;
   state_[vs] = 1;
   state_[r.vt] = state_[r.vu] = 0;
+  deactivate(r.vt);
+  deactivate(r.vu);
+  activate(vs);
   --num_active_;
   ++stats_.ecols;
 }
@@ -516,6 +527,9 @@ void SrMesh::validate() const {
     }
   }
   if (active != num_active_) fail("active count");
+  if (active_list_.size() != num_active_) fail("active list size");
+  for (std::size_t i = 0; i < active_list_.size(); ++i)
+    if (state_[active_list_[i]] != 1 || active_pos_[active_list_[i]] != i) fail("active list entry " + std::to_string(i));
 }
 
 }  // namespace varmesh

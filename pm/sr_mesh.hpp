@@ -114,9 +114,11 @@ class SrMesh {
     sink_ = nullptr;
   }
   void coarsen_one(Index e) { ecol(e); }
+  // Candidates come from the list of active nodes, so a frame costs O(active vertices), not O(nodes).
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
-    for (Index v = static_cast<Index>(h_->num_leaves()); v < state_.size(); ++v)
-      if (state_[v] == 1) fn(v);
+    const auto leaves = static_cast<Index>(h_->num_leaves());
+    for (Index v : active_list_)
+      if (v >= leaves) fn(v);
   }
   template <class Fn> void for_each_child_candidate(Index e, Fn&& fn) const {
     const CollapseRecord& r = h_->record(e);
@@ -124,10 +126,12 @@ class SrMesh {
     if (!h_->is_leaf(r.vu)) fn(r.vu);
   }
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
-    for (Index v = static_cast<Index>(h_->num_leaves()); v < state_.size(); ++v) {
-      if (state_[v] != 2) continue;
-      const CollapseRecord& r = h_->record(v);
-      if (state_[r.vt] == 1 && state_[r.vu] == 1) fn(v);
+    // A refined node whose two children are active, found from its child vt.
+    for (Index v : active_list_) {
+      const Index p = h_->parent(v);
+      if (p == kInvalid) continue;
+      const CollapseRecord& r = h_->record(p);
+      if (r.vt == v && state_[r.vu] == 1) fn(p);
     }
   }
   template <class Fn> void for_each_parent_candidate(Index e, Fn&& fn) const {
@@ -167,7 +171,20 @@ class SrMesh {
   std::vector<Index> adj_;      // 3 per original face
   std::vector<Index> vface_;    // per node: an incident active face
   std::vector<std::uint8_t> state_;
+  std::vector<Index> active_list_;  // the active nodes, in no particular order
+  std::vector<Index> active_pos_;   // per node: its place in active_list_, kInvalid when not active
   std::size_t num_active_ = 0, num_faces_ = 0;
+  void activate(Index v) {
+    active_pos_[v] = static_cast<Index>(active_list_.size());
+    active_list_.push_back(v);
+  }
+  void deactivate(Index v) {
+    const Index at = active_pos_[v], last = active_list_.back();
+    active_list_[at] = last;
+    active_pos_[last] = at;
+    active_list_.pop_back();
+    active_pos_[v] = kInvalid;
+  }
   SrStats stats_;
   mutable std::vector<RingFace> ring_, ring2_;
   mutable std::vector<std::uint32_t> mark_;
