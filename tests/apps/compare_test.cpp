@@ -12,6 +12,7 @@
 #include <string>
 
 #include "multitri/image.hpp"
+#include "apps/cli_support.hpp"
 #include "test_support.hpp"
 
 namespace varmesh {
@@ -19,24 +20,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CmdResult {
-  int status;
-  std::string out, err;
-};
+using testing::CmdResult;
+using testing::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-CmdResult run(const std::string& args, const fs::path& dir) {
-  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = std::string(VARMESH_EXE) + " compare " + args + " >" + out.string() + " 2>" + err.string();
-  const int raw = std::system(cmd.c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
-}
+CmdResult run(const std::string& args, const fs::path& dir) { return testing::run_varmesh("compare " + args, dir); }
 
 int count(const std::string& s, const std::string& what) {
   int n = 0;

@@ -20,6 +20,7 @@
 #include "fourk/subdiv.hpp"
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
+#include "apps/cli_support.hpp"
 #include "test_support.hpp"
 
 namespace varmesh {
@@ -27,29 +28,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CmdResult {
-  int status;
-  std::string out, err;
-};
+using testing::CmdResult;
+using testing::count_lines;
 
-CmdResult run(const std::string& args, const fs::path& dir) {
-  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = std::string(VARMESH_EXE) + " subdiv " + args + " >" + out.string() + " 2>" + err.string();
-  const int raw = std::system(cmd.c_str());
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  };
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
-}
-
-int count_lines(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
+CmdResult run(const std::string& args, const fs::path& dir) { return testing::run_varmesh("subdiv " + args, dir); }
 
 // The file must hold `expected`: the same triangles, positions within `tolerance` (0: as the writers round
 // them; inputs from hand-written files may differ from the library's by a float rounding).
