@@ -58,8 +58,20 @@ class MtFront {
   bool is_refined(NodeId n) const noexcept { return applied_[n] != 0; }
   std::uint64_t tie_key(NodeId n) const noexcept { return n; }
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
-    for (FaceId f : faces_)
-      if (const NodeId d = mt_->destroyer(f); d != kInvalid) fn(d);
+    // Each destroyer once: from the first face of its pre-image that is in the front.
+    for (FaceId f : faces_) {
+      const NodeId d = mt_->destroyer(f);
+      if (d == kInvalid) continue;
+      bool first = true;
+      for (FaceId g : mt_->pre_image(d)) {
+        if (g == f) break;
+        if (has_face(g)) {
+          first = false;
+          break;
+        }
+      }
+      if (first) fn(d);
+    }
   }
   template <class Fn> void for_each_child_candidate(NodeId n, Fn&& fn) const {
     for (NodeId c : mt_->children(n)) fn(c);
