@@ -24,6 +24,8 @@
 
 #include <algorithm>
 #include <chrono>
+
+#include "bench_timing.hpp"
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -44,31 +46,14 @@
 #include "multitri/query.hpp"
 
 using namespace varmesh;
-using Clock = std::chrono::steady_clock;
+using Clock = varmesh::bench::Clock;
 
 namespace {
 
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-struct Lap {
-  double wall = 0.0, cpu = 0.0;  // seconds
-};
-
-class Stopwatch {
- public:
-  Stopwatch() : wall_(Clock::now()), cpu_(thread_cpu_seconds()) {}
-  Lap lap() const {
-    return {std::chrono::duration<double>(Clock::now() - wall_).count(), thread_cpu_seconds() - cpu_};
-  }
-
- private:
-  Clock::time_point wall_;
-  double cpu_;
-};
+using bench::Lap;
+using bench::seconds_since;
+using bench::Stopwatch;
+using bench::thread_cpu_seconds;
 
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;

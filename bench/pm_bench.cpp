@@ -19,6 +19,8 @@
 #include <array>
 #include <bit>
 #include <chrono>
+
+#include "bench_timing.hpp"
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -50,33 +52,14 @@
 #include "pm/sr_mesh.hpp"
 
 using namespace varmesh;
-using Clock = std::chrono::steady_clock;
+using Clock = varmesh::bench::Clock;
 
 namespace {
 
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-// CPU time of the calling thread: on a shared 2-core machine it leaves out the time other processes held
-// the core, which wall time does not. Every timed piece of code here is single-threaded.
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-struct Lap {
-  double wall = 0.0, cpu = 0.0;  // seconds
-};
-
-class Stopwatch {
- public:
-  Stopwatch() : wall_(Clock::now()), cpu_(thread_cpu_seconds()) {}
-  Lap lap() const { return {seconds_since(wall_), thread_cpu_seconds() - cpu_}; }
-
- private:
-  Clock::time_point wall_;
-  double cpu_;
-};
+using bench::Lap;
+using bench::seconds_since;
+using bench::Stopwatch;
+using bench::thread_cpu_seconds;
 
 struct Laps {
   std::vector<double> wall, cpu;

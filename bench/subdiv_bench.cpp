@@ -36,6 +36,8 @@
 
 #include <algorithm>
 #include <chrono>
+
+#include "bench_timing.hpp"
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -66,11 +68,7 @@ namespace {
 double now_ms() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
-double cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
+double cpu_ms() { return 1e3 * varmesh::bench::thread_cpu_seconds(); }
 long status_kb(const char* key) {  // VmRSS, VmHWM, ... from /proc/self/status
   FILE* f = std::fopen("/proc/self/status", "r");
   if (!f) return -1;
@@ -514,9 +512,9 @@ int main(int argc, char** argv) {
     r.lib_bytes = m.memory_bytes();
     r.checksum = m.positions.back().x;
   };
-  auto osd_body = [&](RunReport& r) {
+  auto osd_run = [&](RunReport& r, auto real) {  // `real`: a double or a float, the primvar type
     const double w0 = now_ms(), c0 = cpu_ms();
-    OsdResult<double> o = run_osd<double>(osd_in, poly, level);
+    OsdResult<decltype(real)> o = run_osd<decltype(real)>(osd_in, poly, level);
     r.cpu_ms = cpu_ms() - c0;
     r.wall_ms = now_ms() - w0;
     r.t_create = o.t_create;
@@ -526,18 +524,8 @@ int main(int argc, char** argv) {
     r.vertices = static_cast<std::uint64_t>(o.refiner->GetLevel(level).GetNumVertices());
     r.checksum = o.positions[0].p[0];
   };
-  auto osdf_body = [&](RunReport& r) {
-    const double w0 = now_ms(), c0 = cpu_ms();
-    OsdResult<float> o = run_osd<float>(osd_in, poly, level);
-    r.cpu_ms = cpu_ms() - c0;
-    r.wall_ms = now_ms() - w0;
-    r.t_create = o.t_create;
-    r.t_refine = o.t_refine;
-    r.t_primvar = o.t_primvar;
-    r.faces = static_cast<std::uint64_t>(o.refiner->GetLevel(level).GetNumFaces());
-    r.vertices = static_cast<std::uint64_t>(o.refiner->GetLevel(level).GetNumVertices());
-    r.checksum = o.positions[0].p[0];
-  };
+  auto osd_body = [&](RunReport& r) { osd_run(r, 0.0); };
+  auto osdf_body = [&](RunReport& r) { osd_run(r, 0.0f); };
   for (int rep = 0; rep < reps; ++rep) {
     if (run_v) rv.push_back(in_child(ours_body, warm));
     if (run_o) ro.push_back(in_child(osd_body, warm));
