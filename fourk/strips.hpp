@@ -203,7 +203,7 @@ class StripFront {
   void validate() const;
 
   // The RefinableFront interface (query.hpp).
-  const ElementBound& element_bound(NodeId n) const noexcept { return front_.element_bound(n); }
+  ElementBound element_bound(NodeId n) const noexcept { return front_.element_bound(n); }
   bool is_refined(NodeId n) const noexcept { return front_.is_refined(n); }
   bool is_coarsenable(NodeId n) const noexcept { return front_.is_coarsenable(n); }
   std::uint64_t tie_key(NodeId n) const noexcept { return front_.tie_key(n); }

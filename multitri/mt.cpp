@@ -49,8 +49,8 @@ void boundary_and_interior(const std::vector<Index>& corners, std::span<const Fa
   }
 }
 
-glm::vec3 face_normal(const std::vector<glm::vec3>& p, const std::vector<Index>& c, FaceId f) {
-  const glm::vec3 n = glm::cross(p[c[3 * f + 1]] - p[c[3 * f]], p[c[3 * f + 2]] - p[c[3 * f]]);
+glm::vec3 face_normal(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
+  const glm::vec3 n = glm::cross(b - a, c - a);
   const float len = glm::length(n);
   return len > 0.0f ? n / len : glm::vec3(0.0f);
 }
@@ -245,47 +245,51 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
     }
   }
   mt.image_begin_[num_nodes] = static_cast<FaceId>(old_face_of_new.size());
-  mt.corners_.resize(3 * num_faces);
-  mt.creator_.resize(num_faces);
+  const bool wide = mt.positions_.size() > (std::size_t{1} << Mt::kCornerBits);
+  if (wide)
+    mt.wide_corners_.resize(3 * num_faces);
+  else
+    mt.packed_corners_.resize(num_faces);
   mt.destroyer_.resize(num_faces);
   for (FaceId nf = 0; nf < num_faces; ++nf) {
     const FaceId of = old_face_of_new[nf];
-    for (int k = 0; k < 3; ++k) mt.corners_[3 * nf + k] = corners_[3 * of + k];
-    mt.creator_[nf] = new_of_old[creator[of]];
+    if (wide) {
+      for (int k = 0; k < 3; ++k) mt.wide_corners_[3 * nf + k] = corners_[3 * of + k];
+    } else {
+      mt.packed_corners_[nf] = std::uint64_t{corners_[3 * of]} | (std::uint64_t{corners_[3 * of + 1]} << Mt::kCornerBits) |
+                               (std::uint64_t{corners_[3 * of + 2]} << (2 * Mt::kCornerBits));
+    }
     mt.destroyer_[nf] = destroyer[of] == kInvalid ? kInvalid : new_of_old[destroyer[of]];
   }
+  corners_ = {};
+  mt.creator_hint_.resize(((num_faces - 1) >> Mt::kHintShift) + 1);
+  for (NodeId n = 0; n < num_nodes; ++n)
+    for (FaceId f = mt.image_begin_[n]; f < mt.image_begin_[n + 1]; ++f)
+      if ((f & ((FaceId{1} << Mt::kHintShift) - 1)) == 0) mt.creator_hint_[f >> Mt::kHintShift] = n;
   mt.pre_offsets_.assign(1, 0);
-  mt.parent_offsets_.assign(1, 0);
-  mt.child_offsets_.assign(1, 0);
+  mt.pre_items_.reserve(removed_items_.size());
   for (NodeId i = 0; i < num_nodes; ++i) {
-    const NodeId old = order[i];
-    for (FaceId f : removed(old)) mt.pre_items_.push_back(new_face_of_old[f]);
+    const auto at = mt.pre_items_.size();
+    for (FaceId f : removed(order[i])) mt.pre_items_.push_back(new_face_of_old[f]);
+    std::sort(mt.pre_items_.begin() + static_cast<std::ptrdiff_t>(at), mt.pre_items_.end());
     mt.pre_offsets_.push_back(static_cast<Index>(mt.pre_items_.size()));
-    std::vector<NodeId> ps, cs;
-    for (NodeId p : parents[old]) ps.push_back(new_of_old[p]);
-    for (NodeId c : children[old]) cs.push_back(new_of_old[c]);
-    std::sort(ps.begin(), ps.end());
-    std::sort(cs.begin(), cs.end());
-    mt.parent_items_.insert(mt.parent_items_.end(), ps.begin(), ps.end());
-    mt.parent_offsets_.push_back(static_cast<Index>(mt.parent_items_.size()));
-    mt.child_items_.insert(mt.child_items_.end(), cs.begin(), cs.end());
-    mt.child_offsets_.push_back(static_cast<Index>(mt.child_items_.size()));
   }
 
   // Bounds: the region a node changes is its pre-image (= its image, as a point set).
-  mt.bounds_.resize(num_nodes);
+  std::vector<ElementBound> bounds(num_nodes);
   std::vector<glm::vec3> pts, normals;
   for (NodeId n = 0; n < num_nodes; ++n) {
     pts.clear();
     normals.clear();
     auto add_face = [&](FaceId f) {
-      for (int k = 0; k < 3; ++k) pts.push_back(mt.positions_[mt.corners_[3 * f + k]]);
-      normals.push_back(face_normal(mt.positions_, mt.corners_, f));
+      const auto v = mt.face(f);
+      for (int k = 0; k < 3; ++k) pts.push_back(mt.positions_[v[k]]);
+      normals.push_back(face_normal(mt.positions_[v[0]], mt.positions_[v[1]], mt.positions_[v[2]]));
     };
     for (FaceId f : mt.pre_image(n)) add_face(f);
     for (FaceId f = mt.image_begin(n); f < mt.image_end(n); ++f) add_face(f);
     const Sphere s = bounding_sphere(pts.data(), pts.size());
-    ElementBound& b = mt.bounds_[n];
+    ElementBound& b = bounds[n];
     b.center = s.center;
     b.radius = s.radius;
     b.error = n == 0 ? 0.0f : errors_[order[n] - 1];
@@ -293,9 +297,9 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
   }
   if (options.saturate) {
     for (NodeId n = static_cast<NodeId>(num_nodes); n-- > 1;) {
-      ElementBound& b = mt.bounds_[n];
+      ElementBound& b = bounds[n];
       for (NodeId c : mt.children(n)) {
-        const ElementBound& cb = mt.bounds_[c];
+        const ElementBound& cb = bounds[c];
         const Sphere s = enclose(Sphere{b.center, b.radius}, Sphere{cb.center, cb.radius});
         b.center = s.center;
         b.radius = s.radius;
@@ -304,35 +308,164 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
       }
     }
     // The source is never refined or coarsened; give it a bound enclosing everything.
-    Sphere all{mt.bounds_[0].center, mt.bounds_[0].radius};
+    Sphere all{bounds[0].center, bounds[0].radius};
     float err = 0.0f;
     for (NodeId c : mt.children(0)) {
-      all = enclose(all, Sphere{mt.bounds_[c].center, mt.bounds_[c].radius});
-      err = std::max(err, mt.bounds_[c].error);
+      all = enclose(all, Sphere{bounds[c].center, bounds[c].radius});
+      err = std::max(err, bounds[c].error);
     }
-    mt.bounds_[0].center = all.center;
-    mt.bounds_[0].radius = all.radius;
-    mt.bounds_[0].error = err;
+    bounds[0].center = all.center;
+    bounds[0].radius = all.radius;
+    bounds[0].error = err;
   }
+  mt.pack_bounds(bounds, options.saturate);
 
   if (node_new_to_old) *node_new_to_old = std::move(order);
   if (face_new_to_old) *face_new_to_old = std::move(old_face_of_new);
   return mt;
 }
 
+namespace detail {
+ConeCosTable::ConeCosTable() noexcept {
+  const double unit = std::acos(-1.0) / 2.0 / 254.0;
+  for (int i = 0; i < 255; ++i) v[i] = static_cast<float>(std::cos(i * unit));
+  v[255] = -1.0f;
+}
+}  // namespace detail
+
+const detail::ConeCosTable Mt::kConeCos;
+
+namespace {
+
+constexpr double kConeUnit = 1.5707963267948966 / 254.0;  // radians per half-angle code
+
+std::uint32_t encode_octahedral(const glm::vec3& axis) {
+  const glm::dvec3 a = glm::normalize(glm::dvec3(axis));
+  const double l1 = std::abs(a.x) + std::abs(a.y) + std::abs(a.z);
+  double x = a.x / l1, y = a.y / l1;
+  if (a.z < 0.0) {
+    const double ox = x;
+    x = std::copysign(1.0 - std::abs(y), ox);
+    y = std::copysign(1.0 - std::abs(ox), y);
+  }
+  const auto q = [](double t) { return static_cast<long>(std::floor((t + 1.0) * 0.5 * 4095.0)); };
+  // Of the four grid points around (x, y), keep the one whose decoded axis is closest.
+  std::uint32_t best = 0;
+  double best_dot = -2.0;
+  for (long du = 0; du < 2; ++du)
+    for (long dv = 0; dv < 2; ++dv) {
+      const auto u = static_cast<std::uint32_t>(std::clamp(q(x) + du, 0L, 4095L));
+      const auto v = static_cast<std::uint32_t>(std::clamp(q(y) + dv, 0L, 4095L));
+      const std::uint32_t code = u | (v << 12);
+      const double d = glm::dot(glm::dvec3(Mt::decode_octahedral(code)), a);
+      if (d > best_dot) {
+        best_dot = d;
+        best = code;
+      }
+    }
+  return best;
+}
+
+double angle_between(const glm::vec3& a, const glm::vec3& b) {
+  return std::acos(std::clamp(glm::dot(glm::dvec3(a), glm::dvec3(b)), -1.0, 1.0));
+}
+
+// Half-angle code for at least `angle` radians (with slack for float decoding), or the full-cone code.
+std::uint32_t cone_angle_code(double angle) {
+  const double code = std::ceil((angle + 1e-5) / kConeUnit);
+  return code > 254.0 ? Mt::kFullConeCode : static_cast<std::uint32_t>(std::max(code, 0.0));
+}
+
+}  // namespace
+
+std::uint16_t Mt::Frame::encode_radius(float need) const {
+  // Smallest code whose decoded radius covers `need` with a relative slack: nested spheres must stay
+  // nested after the float rounding of distances computed from them (see enclose()).
+  const float target = need * (1.0f + 2e-6f);
+  if (radius(65535) < target) throw InvalidInput("MtBuilder: bounding sphere too large to pack", 0);
+  std::uint32_t first = 0, last = 65535;
+  while (first < last) {
+    const std::uint32_t mid = (first + last) / 2;
+    if (radius(static_cast<std::uint16_t>(mid)) >= target)
+      last = mid;
+    else
+      first = mid + 1;
+  }
+  return static_cast<std::uint16_t>(first);
+}
+
+void Mt::pack_bounds(const std::vector<ElementBound>& bounds, bool nest) {
+  Box3 box;
+  for (const glm::vec3& p : positions_) box.add(p);
+  for (const ElementBound& b : bounds) box.add(b.center);
+  frame_.lo = box.lo;
+  frame_.step = (box.hi - box.lo) / 65535.0f;
+  const float diag = glm::length(box.hi - box.lo);
+  frame_.unit = diag > 0.0f ? diag : 1.0f;
+  bounds_.resize(bounds.size());
+  for (std::size_t n = 0; n < bounds.size(); ++n) {
+    const ElementBound& b = bounds[n];
+    PackedBound& p = bounds_[n];
+    for (int k = 0; k < 3; ++k) {
+      const double t = frame_.step[k] > 0.0f ? (double(b.center[k]) - frame_.lo[k]) / frame_.step[k] : 0.0;
+      p.c[k] = static_cast<std::uint16_t>(std::clamp(std::lround(t), 0L, 65535L));
+    }
+    p.r = frame_.encode_radius(b.radius + glm::length(frame_.center(p.c) - b.center));
+    p.error = b.error;
+    if (b.cone.is_full()) {
+      p.cone = kFullConeCode << 24;
+    } else {
+      const std::uint32_t axis = encode_octahedral(b.cone.axis);
+      const double half = std::acos(std::clamp(double(b.cone.cos_half_angle), -1.0, 1.0));
+      p.cone = axis | (cone_angle_code(half + angle_between(decode_octahedral(axis), b.cone.axis)) << 24);
+    }
+  }
+  if (!nest) return;
+  // Quantization moved centres and rounded radii and angles up, each node on its own: grow parents
+  // (children first) until every decoded child bound lies in its decoded parent's again.
+  for (NodeId n = static_cast<NodeId>(bounds_.size()); n-- > 0;) {
+    PackedBound& p = bounds_[n];
+    for (NodeId c : children(n)) {
+      const PackedBound& q = bounds_[c];
+      p.error = std::max(p.error, q.error);
+      const float need = glm::length(frame_.center(p.c) - frame_.center(q.c)) + frame_.radius(q.r);
+      if (frame_.radius(p.r) < need * (1.0f + 2e-6f)) p.r = frame_.encode_radius(need);
+      const std::uint32_t pa = p.cone >> 24, qa = q.cone >> 24;
+      if (pa == kFullConeCode) continue;
+      if (qa == kFullConeCode) {
+        p.cone = kFullConeCode << 24;
+        continue;
+      }
+      const double need_angle = angle_between(decode_octahedral(p.cone), decode_octahedral(q.cone)) + qa * kConeUnit;
+      if (need_angle > pa * kConeUnit) p.cone = (p.cone & 0xffffffu) | (cone_angle_code(need_angle) << 24);
+    }
+  }
+}
+
 void Mt::validate() const {
   const std::size_t nn = num_nodes(), nf = num_faces();
   auto fail = [](const std::string& why, std::uint64_t e) { throw InvalidInput("Mt::validate: " + why, e); };
   if (nn == 0 || kind_[0] != NodeKind::kSource) fail("node 0 is not the source", 0);
-  if (image_begin_.size() != nn + 1 || image_begin_[nn] != nf) fail("image ranges do not cover the faces", 0);
+  if (image_begin_.size() != nn + 1 || image_begin_[0] != 0 || image_begin_[nn] != nf)
+    fail("image ranges do not cover the faces", 0);
+  if (pre_offsets_.size() != nn + 1 || bounds_.size() != nn) fail("per-node arrays have the wrong size", 0);
+  if (creator_hint_.size() != ((nf + (FaceId{1} << kHintShift) - 1) >> kHintShift)) fail("creator hints have the wrong size", 0);
   for (NodeId n = 0; n < nn; ++n) {
-    if (image_begin_[n] > image_begin_[n + 1]) fail("image range decreasing at node " + std::to_string(n), n);
-    for (FaceId f = image_begin_[n]; f < image_begin_[n + 1]; ++f)
-      if (creator_[f] != n) fail("face " + std::to_string(f) + " creator disagrees with its image range", f);
+    if (image_begin_[n] >= image_begin_[n + 1]) fail("node " + std::to_string(n) + " has an empty image", n);
+    for (FaceId f = image_begin_[n]; f < image_begin_[n + 1]; ++f) {
+      if ((f >> kHintShift) << kHintShift == f && creator_hint_[f >> kHintShift] != n)
+        fail("creator hint of face " + std::to_string(f) + " disagrees with the image ranges", f);
+      if (creator(f) != n) fail("face " + std::to_string(f) + " creator disagrees with its image range", f);
+    }
     if (n > 0 && pre_image(n).empty()) fail("node " + std::to_string(n) + " has an empty pre-image", n);
+    FaceId prev = 0;
+    bool first = true;
     for (FaceId f : pre_image(n)) {
       if (f >= nf || destroyer_[f] != n) fail("node " + std::to_string(n) + " pre-image face disagrees", n);
-      if (creator_[f] >= n) fail("node " + std::to_string(n) + " precedes the creator of its pre-image", n);
+      if (!first && f <= prev) fail("node " + std::to_string(n) + " pre-image is not sorted", n);
+      if (creator(f) >= n) fail("node " + std::to_string(n) + " precedes the creator of its pre-image", n);
+      prev = f;
+      first = false;
     }
     for (NodeId p : parents(n))
       if (p >= n) fail("node " + std::to_string(n) + " has a parent numbered after it", n);
@@ -340,17 +473,32 @@ void Mt::validate() const {
       if (c <= n) fail("node " + std::to_string(n) + " has a child numbered before it", n);
   }
   for (FaceId f = 0; f < nf; ++f) {
-    for (int k = 0; k < 3; ++k)
-      if (corners_[3 * f + k] >= positions_.size()) fail("face " + std::to_string(f) + " vertex out of range", f);
+    for (VertexId v : face(f))
+      if (v >= positions_.size()) fail("face " + std::to_string(f) + " vertex out of range", f);
     if (destroyer_[f] != kInvalid && destroyer_[f] >= nn) fail("face " + std::to_string(f) + " destroyer out of range", f);
   }
 }
 
+std::vector<Mt::MemoryItem> Mt::memory_breakdown() const {
+  auto bytes = [](const auto& v) { return v.size() * sizeof(v[0]); };
+  return {
+      {"positions (12 B / vertex)", bytes(positions_)},
+      {wide_corners_.empty() ? "corners (8 B / face, 21-bit packed)" : "corners (12 B / face)",
+       bytes(packed_corners_) + bytes(wide_corners_)},
+      {"destroyer (4 B / face)", bytes(destroyer_)},
+      {"creator hints (4 B / 16 faces)", bytes(creator_hint_)},
+      {"bounds (16 B / node, packed)", bytes(bounds_)},
+      {"pre-image offsets + items", bytes(pre_offsets_) + bytes(pre_items_)},
+      {"image_begin + kind", bytes(image_begin_) + bytes(kind_)},
+      {"Mt object", sizeof(Mt)},
+  };
+}
+
 std::size_t Mt::memory_bytes() const noexcept {
   auto bytes = [](const auto& v) { return v.size() * sizeof(v[0]); };
-  return bytes(positions_) + bytes(corners_) + bytes(creator_) + bytes(destroyer_) + bytes(kind_) +
-         bytes(pre_offsets_) + bytes(pre_items_) + bytes(image_begin_) + bytes(parent_offsets_) +
-         bytes(parent_items_) + bytes(child_offsets_) + bytes(child_items_) + bytes(bounds_);
+  return sizeof(Mt) + bytes(positions_) + bytes(packed_corners_) + bytes(wide_corners_) + bytes(destroyer_) +
+         bytes(creator_hint_) + bytes(kind_) + bytes(pre_offsets_) + bytes(pre_items_) + bytes(image_begin_) +
+         bytes(bounds_);
 }
 
 }  // namespace varmesh

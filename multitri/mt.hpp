@@ -14,9 +14,19 @@
 /// boundary as its pre-image and no interior edge of the pre-image survives in the image (minimally
 /// compatible modification, section 3.1). Consequently every front (order ideal of nodes) is a conforming
 /// mesh when the base mesh is.
+///
+/// Storage (about 45 bytes per finest face on a semi-regular 4-8 bunny; BENCHMARKS.md): per face its
+/// corners (three 21-bit indices in 8 bytes up to 2^21 vertices, 12 bytes beyond) and its destroyer; per
+/// node its kind, image start, sorted pre-image and a 16-byte packed bound. The creator of a face, the
+/// parents and the children of a node are derived from those on demand (creator: a sampled hint and a
+/// short scan; parents: the creators of the sorted pre-image, whose faces are grouped by creator; children:
+/// the destroyers of the image), each in O(its size).
 #include <array>
+#include <bit>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <ranges>
 #include <span>
 #include <vector>
 
@@ -27,64 +37,236 @@
 
 namespace varmesh {
 
+namespace detail {
+/// cos of the packed cone half-angles (code * 90/254 degrees); entry 255 is -1 (any direction).
+struct ConeCosTable {
+  float v[256];
+  ConeCosTable() noexcept;
+};
+}  // namespace detail
+
 enum class NodeKind : std::uint8_t { kSource = 0, kSplit = 1, kSwap = 2, kGeneric = 3 };
 
 const char* to_string(NodeKind kind) noexcept;
 
 class Mt {
  public:
+  class ParentRange;
+  class ChildRange;
+
   Mt() = default;
 
   std::size_t num_nodes() const noexcept { return kind_.size(); }  ///< including the source
-  std::size_t num_faces() const noexcept { return creator_.size(); }
+  std::size_t num_faces() const noexcept { return destroyer_.size(); }
   std::size_t num_vertices() const noexcept { return positions_.size(); }
   static constexpr NodeId source() noexcept { return 0; }
 
   NodeKind kind(NodeId n) const noexcept { return kind_[n]; }
+  /// The faces n removes, in increasing order.
   std::span<const FaceId> pre_image(NodeId n) const noexcept {
     return {pre_items_.data() + pre_offsets_[n], pre_offsets_[n + 1] - pre_offsets_[n]};
   }
   FaceId image_begin(NodeId n) const noexcept { return image_begin_[n]; }
   FaceId image_end(NodeId n) const noexcept { return image_begin_[n + 1]; }
   std::size_t image_size(NodeId n) const noexcept { return image_begin_[n + 1] - image_begin_[n]; }
-  /// Distinct nodes that create a face of n's pre-image.
-  std::span<const NodeId> parents(NodeId n) const noexcept {
-    return {parent_items_.data() + parent_offsets_[n], parent_offsets_[n + 1] - parent_offsets_[n]};
-  }
-  /// Distinct nodes that remove a face of n's image.
-  std::span<const NodeId> children(NodeId n) const noexcept {
-    return {child_items_.data() + child_offsets_[n], child_offsets_[n + 1] - child_offsets_[n]};
-  }
+  /// Distinct nodes that create a face of n's pre-image, in increasing order (derived, not stored).
+  ParentRange parents(NodeId n) const noexcept;
+  /// Distinct nodes that remove a face of n's image, in the order of their first face in n's image
+  /// (derived, not stored).
+  ChildRange children(NodeId n) const noexcept;
 
   std::array<VertexId, 3> face(FaceId f) const noexcept {
-    return {corners_[3 * f], corners_[3 * f + 1], corners_[3 * f + 2]};
+    if (!wide_corners_.empty()) return {wide_corners_[3 * f], wide_corners_[3 * f + 1], wide_corners_[3 * f + 2]};
+    const std::uint64_t w = packed_corners_[f];
+    return {static_cast<VertexId>(w & kCornerMask), static_cast<VertexId>((w >> kCornerBits) & kCornerMask),
+            static_cast<VertexId>(w >> (2 * kCornerBits))};
   }
-  NodeId creator(FaceId f) const noexcept { return creator_[f]; }
+  /// The node whose image holds f: a short forward scan of image_begin from a sampled hint (every
+  /// 2^kHintShift faces), since images are non-empty and numbered consecutively.
+  NodeId creator(FaceId f) const noexcept {
+    NodeId n = creator_hint_[f >> kHintShift];
+    while (image_begin_[n + 1] <= f) ++n;
+    return n;
+  }
   NodeId destroyer(FaceId f) const noexcept { return destroyer_[f]; }  ///< kInvalid: the drain
 
   const glm::vec3& position(VertexId v) const noexcept { return positions_[v]; }
   const std::vector<glm::vec3>& positions() const noexcept { return positions_; }
-  const std::vector<Index>& corners() const noexcept { return corners_; }
-  const ElementBound& bound(NodeId n) const noexcept { return bounds_[n]; }
+  /// The node's bound, decoded from its 16-byte packed form (see PackedBound). Conservative: the decoded
+  /// sphere and cone contain the exact ones, the error is exact; decoded bounds are nested (a child's
+  /// sphere inside its parent's, its cone inside its parent's) when the builder saturates.
+  ElementBound bound(NodeId n) const noexcept {
+    const PackedBound& p = bounds_[n];
+    ElementBound b;
+    b.center = frame_.center(p.c);
+    b.radius = frame_.radius(p.r);
+    b.error = p.error;
+    if ((p.cone >> 24) != kFullConeCode) {
+      b.cone.axis = decode_octahedral(p.cone);
+      b.cone.cos_half_angle = cone_cos(p.cone >> 24);
+    }
+    return b;
+  }
 
   /// Re-checks every invariant listed above; throws InvalidInput naming the node or face. O(size log size).
   void validate() const;
-  /// Bytes held by this structure's arrays.
+  /// Bytes held by this structure (its arrays and the object itself), and the same split by array.
   std::size_t memory_bytes() const noexcept;
+  struct MemoryItem {
+    const char* name;
+    std::size_t bytes;
+  };
+  std::vector<MemoryItem> memory_breakdown() const;
+  /// True when corners take 12 bytes per face (more than 2^21 vertices) instead of 8.
+  bool wide_corners() const noexcept { return !wide_corners_.empty(); }
+
+  // Packed-bound codec, public for tests.
+  static constexpr int kCornerBits = 21;
+  static constexpr std::uint64_t kCornerMask = (std::uint64_t{1} << kCornerBits) - 1;
+  static constexpr unsigned kFullConeCode = 255;
+  static glm::vec3 decode_octahedral(std::uint32_t code) noexcept {
+    float x = float(code & 4095u) * (2.0f / 4095.0f) - 1.0f;
+    float y = float((code >> 12) & 4095u) * (2.0f / 4095.0f) - 1.0f;
+    const float z = 1.0f - std::abs(x) - std::abs(y);
+    if (z < 0.0f) {
+      const float ox = x;
+      x = std::copysign(1.0f - std::abs(y), ox);
+      y = std::copysign(1.0f - std::abs(ox), y);
+    }
+    const float len = std::sqrt(x * x + y * y + z * z);
+    return {x / len, y / len, z / len};
+  }
+  static float cone_cos(unsigned angle_code) noexcept { return kConeCos.v[angle_code]; }
 
  private:
   friend class MtBuilder;
+  static constexpr int kHintShift = 4;
+  static const detail::ConeCosTable kConeCos;
+
+  /// 16 bytes per node: centre quantized to 16 bits per axis on the vertices' box, radius as a 16-bit
+  /// float (5-bit exponent, 11-bit mantissa) in units of the box diagonal, exact error, and the normal cone
+  /// as a 12+12-bit octahedral axis with an 8-bit half-angle (units of 90/254 degrees; 255 = any direction).
+  struct PackedBound {
+    std::uint16_t c[3];
+    std::uint16_t r;
+    float error;
+    std::uint32_t cone;
+  };
+  struct Frame {
+    glm::vec3 lo{0.0f}, step{0.0f};
+    float unit = 1.0f;  // radius unit: the box diagonal
+    glm::vec3 center(const std::uint16_t* q) const noexcept {
+      return lo + glm::vec3(float(q[0]), float(q[1]), float(q[2])) * step;
+    }
+    float radius(std::uint16_t code) const noexcept {
+      // Exponents 2^-28 .. 2^3: the float's own bits, rebuilt by shifts.
+      const std::uint32_t bits = ((std::uint32_t(code >> 11) + 99u) << 23) | (std::uint32_t(code & 2047u) << 12);
+      return std::bit_cast<float>(bits) * unit;
+    }
+    std::uint16_t encode_radius(float need) const;
+  };
+  void pack_bounds(const std::vector<ElementBound>& bounds, bool nest);
+
   std::vector<glm::vec3> positions_;
-  std::vector<Index> corners_;       // 3 per face
-  std::vector<NodeId> creator_;      // per face
-  std::vector<NodeId> destroyer_;    // per face
-  std::vector<NodeKind> kind_;       // per node
+  std::vector<std::uint64_t> packed_corners_;  // per face: 3 x 21 bits (when <= 2^21 vertices)
+  std::vector<Index> wide_corners_;            // 3 per face otherwise
+  std::vector<NodeId> destroyer_;              // per face
+  std::vector<NodeId> creator_hint_;           // creator of face i << kHintShift
+  std::vector<NodeKind> kind_;                 // per node
   std::vector<Index> pre_offsets_, pre_items_;
-  std::vector<FaceId> image_begin_;  // num_nodes + 1
-  std::vector<Index> parent_offsets_, parent_items_;
-  std::vector<Index> child_offsets_, child_items_;
-  std::vector<ElementBound> bounds_;
+  std::vector<FaceId> image_begin_;            // num_nodes + 1
+  std::vector<PackedBound> bounds_;
+  Frame frame_;
 };
+
+/// Forward ranges over derived relations (empty() and front() from view_interface; size() counts).
+class Mt::ParentRange : public std::ranges::view_interface<Mt::ParentRange> {
+ public:
+  class iterator {
+   public:
+    using value_type = NodeId;
+    using difference_type = std::ptrdiff_t;
+    iterator() = default;
+    iterator(const Mt* mt, const FaceId* p, const FaceId* end) noexcept : mt_(mt), p_(p), end_(end) {
+      if (p_ != end_) cur_ = mt_->creator(*p_);
+    }
+    NodeId operator*() const noexcept { return cur_; }
+    iterator& operator++() noexcept {
+      // The pre-image is sorted and faces are numbered by creator: one creator's faces are consecutive.
+      const FaceId stop = mt_->image_end(cur_);
+      while (++p_ != end_ && *p_ < stop) {}
+      if (p_ != end_) cur_ = mt_->creator(*p_);
+      return *this;
+    }
+    iterator operator++(int) noexcept { iterator t = *this; ++*this; return t; }
+    bool operator==(const iterator& o) const noexcept { return p_ == o.p_; }
+
+   private:
+    const Mt* mt_ = nullptr;
+    const FaceId* p_ = nullptr;
+    const FaceId* end_ = nullptr;
+    NodeId cur_ = kInvalid;
+  };
+  ParentRange(const Mt* mt, std::span<const FaceId> pre) noexcept : mt_(mt), pre_(pre) {}
+  iterator begin() const noexcept { return {mt_, pre_.data(), pre_.data() + pre_.size()}; }
+  iterator end() const noexcept { return {mt_, pre_.data() + pre_.size(), pre_.data() + pre_.size()}; }
+  std::size_t size() const noexcept { return static_cast<std::size_t>(std::ranges::distance(begin(), end())); }
+
+ private:
+  const Mt* mt_;
+  std::span<const FaceId> pre_;
+};
+
+class Mt::ChildRange : public std::ranges::view_interface<Mt::ChildRange> {
+ public:
+  class iterator {
+   public:
+    using value_type = NodeId;
+    using difference_type = std::ptrdiff_t;
+    iterator() = default;
+    iterator(const Mt* mt, FaceId f, FaceId b, FaceId e) noexcept : mt_(mt), f_(f), b_(b), e_(e) { settle(); }
+    NodeId operator*() const noexcept { return mt_->destroyer(f_); }
+    iterator& operator++() noexcept {
+      ++f_;
+      settle();
+      return *this;
+    }
+    iterator operator++(int) noexcept { iterator t = *this; ++*this; return t; }
+    bool operator==(const iterator& o) const noexcept { return f_ == o.f_; }
+
+   private:
+    // Stops at a face whose destroyer is listed here for the first time: no face of the destroyer's
+    // (sorted) pre-image lies in [b_, f_).
+    void settle() noexcept {
+      for (; f_ != e_; ++f_) {
+        const NodeId d = mt_->destroyer(f_);
+        if (d == kInvalid) continue;
+        bool first = true;
+        for (FaceId g : mt_->pre_image(d)) {
+          if (g >= f_) break;
+          if (g >= b_) {
+            first = false;
+            break;
+          }
+        }
+        if (first) return;
+      }
+    }
+    const Mt* mt_ = nullptr;
+    FaceId f_ = 0, b_ = 0, e_ = 0;
+  };
+  ChildRange(const Mt* mt, FaceId b, FaceId e) noexcept : mt_(mt), b_(b), e_(e) {}
+  iterator begin() const noexcept { return {mt_, b_, b_, e_}; }
+  iterator end() const noexcept { return {mt_, e_, b_, e_}; }
+  std::size_t size() const noexcept { return static_cast<std::size_t>(std::ranges::distance(begin(), end())); }
+
+ private:
+  const Mt* mt_;
+  FaceId b_, e_;
+};
+
+inline Mt::ParentRange Mt::parents(NodeId n) const noexcept { return {this, pre_image(n)}; }
+inline Mt::ChildRange Mt::children(NodeId n) const noexcept { return {this, image_begin_[n], image_begin_[n + 1]}; }
 
 /// Builds an Mt from modifications given in any order, checks the definition and renumbers.
 ///

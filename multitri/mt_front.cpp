@@ -10,11 +10,7 @@ namespace varmesh {
 MtFront::MtFront(const Mt& mt) : mt_(&mt) { reset(); }
 
 void MtFront::reset() {
-  const std::size_t nn = mt_->num_nodes();
-  applied_.assign(nn, 0);
-  missing_parents_.resize(nn);
-  for (NodeId n = 0; n < nn; ++n) missing_parents_[n] = static_cast<Index>(mt_->parents(n).size());
-  applied_children_.assign(nn, 0);
+  applied_.assign(mt_->num_nodes(), 0);
   faces_.clear();
   slot_.assign(mt_->num_faces(), kInvalid);
   num_applied_ = 0;
@@ -52,8 +48,6 @@ void MtFront::apply(NodeId n) {
   for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f) add_face(f);
   applied_[n] = 1;
   ++num_applied_;
-  for (NodeId c : mt_->children(n)) --missing_parents_[c];
-  for (NodeId p : mt_->parents(n)) ++applied_children_[p];
 }
 
 void MtFront::undo(NodeId n) {
@@ -67,8 +61,6 @@ void MtFront::undo(NodeId n) {
   for (FaceId f : mt_->pre_image(n)) add_face(f);
   applied_[n] = 0;
   --num_applied_;
-  for (NodeId c : mt_->children(n)) ++missing_parents_[c];
-  for (NodeId p : mt_->parents(n)) --applied_children_[p];
 }
 
 TriMesh MtFront::to_mesh(std::vector<FaceId>* face_ids, std::vector<VertexId>* vertex_ids) const {
@@ -105,13 +97,13 @@ void MtFront::validate() const {
       if (!applied_[p]) fail("node " + std::to_string(n) + " is applied but its parent " + std::to_string(p) + " is not", n);
   }
   if (count != num_applied_) fail("applied count is stale", count);
-  // The O(1) legality counters agree with the applied flags.
+  // The face-table legality tests agree with the definitions on the applied flags.
   for (NodeId n = 0; n < mt.num_nodes(); ++n) {
-    Index missing = 0, applied_children = 0;
-    for (NodeId p : mt.parents(n)) missing += applied_[p] ? 0 : 1;
-    for (NodeId c : mt.children(n)) applied_children += applied_[c] ? 1 : 0;
-    if (missing != missing_parents_[n] || applied_children != applied_children_[n])
-      fail("node " + std::to_string(n) + " has stale parent/child counters", n);
+    bool parents_applied = true, children_unapplied = true;
+    for (NodeId p : mt.parents(n)) parents_applied = parents_applied && applied_[p];
+    for (NodeId c : mt.children(n)) children_unapplied = children_unapplied && !applied_[c];
+    if (can_apply(n) != (!applied_[n] && parents_applied) || can_undo(n) != (n != 0 && applied_[n] && children_unapplied))
+      fail("node " + std::to_string(n) + ": legality from the face table disagrees with the applied flags", n);
   }
   std::size_t expected = 0;
   for (FaceId f = 0; f < mt.num_faces(); ++f) {

@@ -8,7 +8,8 @@
 /// Moves: apply/undo are single legal steps (they throw InvalidInput when illegal); refine/coarsen force
 /// what they need (refining applies missing ancestors first, coarsening undoes applied descendants first).
 /// All four throw InvalidInput naming the node when it is not a node of the Mt.
-/// Cost: O(faces changed) per node, O(1) legality tests.
+/// Cost: O(faces changed) per node; legality tests O(faces of the node) from the face table, so a front
+/// holds no per-node counters.
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -25,8 +26,21 @@ class MtFront {
 
   const Mt& mt() const noexcept { return *mt_; }
   bool is_applied(NodeId n) const noexcept { return applied_[n] != 0; }
-  bool can_apply(NodeId n) const noexcept { return !applied_[n] && missing_parents_[n] == 0; }
-  bool can_undo(NodeId n) const noexcept { return n != 0 && applied_[n] && applied_children_[n] == 0; }
+  /// Legal when not applied and every pre-image face is current (a pre-image face is absent exactly when
+  /// its creator is not applied, since its only remover is n). O(pre-image size), no per-node counters.
+  bool can_apply(NodeId n) const noexcept {
+    if (applied_[n]) return false;
+    for (FaceId g : mt_->pre_image(n))
+      if (!has_face(g)) return false;
+    return true;
+  }
+  /// Legal when applied and every image face is current (none removed by an applied child).
+  bool can_undo(NodeId n) const noexcept {
+    if (n == 0 || !applied_[n]) return false;
+    for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f)
+      if (!has_face(f)) return false;
+    return true;
+  }
 
   void apply(NodeId n);
   void undo(NodeId n);
@@ -54,7 +68,7 @@ class MtFront {
   void validate() const;
 
   // The RefinableFront interface used by extract()/update() (query.hpp).
-  const ElementBound& element_bound(NodeId n) const noexcept { return mt_->bound(n); }
+  ElementBound element_bound(NodeId n) const noexcept { return mt_->bound(n); }
   bool is_refined(NodeId n) const noexcept { return applied_[n] != 0; }
   std::uint64_t tie_key(NodeId n) const noexcept { return n; }
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
@@ -80,7 +94,7 @@ class MtFront {
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
     // A maximal applied node has its whole image in the front, so its faces' creators list it.
     for (FaceId f : faces_)
-      if (const NodeId c = mt_->creator(f); can_undo(c) && mt_->image_begin(c) == f) fn(c);
+      if (const NodeId c = mt_->creator(f); mt_->image_begin(c) == f && can_undo(c)) fn(c);
   }
   template <class Fn> void for_each_parent_candidate(NodeId n, Fn&& fn) const {
     for (NodeId p : mt_->parents(n)) fn(p);
@@ -102,8 +116,6 @@ class MtFront {
 
   const Mt* mt_;
   std::vector<std::uint8_t> applied_;
-  std::vector<Index> missing_parents_;   // unapplied parents
-  std::vector<Index> applied_children_;  // applied children
   std::vector<FaceId> faces_;            // current faces, unordered
   std::vector<Index> slot_;              // position of a face in faces_, kInvalid if absent
   std::size_t num_applied_ = 0;
@@ -123,12 +135,11 @@ void MtFront::refine(NodeId n, Sink&& sink) {
       continue;
     }
     bool pushed = false;
-    if (missing_parents_[t] != 0)
-      for (NodeId p : mt_->parents(t))
-        if (!applied_[p]) {
-          stack_.push_back(p);
-          pushed = true;
-        }
+    for (FaceId g : mt_->pre_image(t))
+      if (!has_face(g)) {  // its creator is not applied (it may be pushed twice: popped as applied)
+        stack_.push_back(mt_->creator(g));
+        pushed = true;
+      }
     if (!pushed) {
       stack_.pop_back();
       apply(t);
@@ -150,12 +161,11 @@ void MtFront::coarsen(NodeId n, Sink&& sink) {
       continue;
     }
     bool pushed = false;
-    if (applied_children_[t] != 0)
-      for (NodeId c : mt_->children(t))
-        if (applied_[c]) {
-          stack_.push_back(c);
-          pushed = true;
-        }
+    for (FaceId f = mt_->image_begin(t); f < mt_->image_end(t); ++f)
+      if (!has_face(f)) {  // removed by an applied child
+        stack_.push_back(mt_->destroyer(f));
+        pushed = true;
+      }
     if (!pushed) {
       stack_.pop_back();
       undo(t);

@@ -27,7 +27,8 @@ std::string encode_mt(const Mt& mt) {
     w.f32(p.y);
     w.f32(p.z);
   }
-  for (Index c : mt.corners()) w.le<std::uint32_t>(c);
+  for (FaceId f = 0; f < mt.num_faces(); ++f)
+    for (VertexId v : mt.face(f)) w.le<std::uint32_t>(v);
   w.le(static_cast<std::uint32_t>(mt.image_size(Mt::source())));
   for (NodeId n = 1; n < mt.num_nodes(); ++n) {
     w.le(static_cast<std::uint8_t>(mt.kind(n)));

@@ -327,9 +327,9 @@ TEST(MtFront, IllegalMovesThrowNamingTheNodeAndChangeNothing) {
   // A node with a parent other than the source.
   NodeId deep = kInvalid;
   for (NodeId n = 1; n < mt.num_nodes() && deep == kInvalid; ++n)
-    if (mt.parents(n)[0] != 0) deep = n;
+    if (mt.parents(n).front() != 0) deep = n;
   ASSERT_NE(deep, kInvalid);
-  const NodeId top = mt.parents(deep)[0];
+  const NodeId top = mt.parents(deep).front();
   auto expect_throw = [&](const std::function<void()>& fn, NodeId n, const std::string& reason) {
     const auto applied_before = applied_set(f);
     std::vector<FaceId> faces_before(f.faces().begin(), f.faces().end());

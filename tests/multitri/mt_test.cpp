@@ -54,7 +54,7 @@ TEST(Mt, SplitNodeBuildsAndValidates) {
   EXPECT_EQ(mt.image_size(0), 2u);
   EXPECT_EQ(mt.image_size(1), 4u);
   ASSERT_EQ(mt.parents(1).size(), 1u);
-  EXPECT_EQ(mt.parents(1)[0], 0u);
+  EXPECT_EQ(mt.parents(1).front(), 0u);
   EXPECT_FLOAT_EQ(mt.bound(1).error, 0.25f);
   // The bounding sphere contains every vertex the node touches.
   for (VertexId v = 0; v < mt.num_vertices(); ++v)

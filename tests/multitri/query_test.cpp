@@ -34,7 +34,7 @@ using testing::projected_area;
 class ShuffledFront {
  public:
   ShuffledFront(MtFront& f, std::uint32_t seed) : f_(&f), rng_(seed) {}
-  const ElementBound& element_bound(Index e) const { return f_->element_bound(e); }
+  ElementBound element_bound(Index e) const { return f_->element_bound(e); }
   bool is_refined(Index e) const { return f_->is_refined(e); }
   bool is_coarsenable(Index e) const { return f_->is_coarsenable(e); }
   std::size_t num_faces() const { return f_->num_faces(); }
