@@ -83,6 +83,40 @@ Optimum<N> segment_impl(const Dense<N>& q, const Vec<N>& x0, const Vec<N>& x1) {
   return best;
 }
 
+// 3x3 fast path of solve(): A x = -b by cofactors, with the conditioning test decided from the invariants
+// of A where they are conclusive. For PSD A with eigenvalues l1 <= l2 <= l3, trace T, sum of principal 2x2
+// minors M and determinant D: l2 l3 <= M <= 3 l2 l3 and T / 3 <= l3 <= T, so l1 / l3 = D / (l2 l3 l3) lies
+// in [D / (M T), 9 D / (M T)]. Only a ratio inside that band near kMinEigenRatio needs the eigenvalues
+// (rare); elsewhere the answer is the same as solve()'s at a fraction of the cost.
+enum class Conditioning { kGood, kBad, kUnsure };
+struct Solve3 {
+  Conditioning c = Conditioning::kUnsure;
+  glm::dvec3 x{0.0};
+};
+Solve3 solve3(const Quadric& q) {
+  const double c00 = q.a11 * q.a22 - q.a12 * q.a12, c01 = q.a02 * q.a12 - q.a01 * q.a22,
+               c02 = q.a01 * q.a12 - q.a02 * q.a11;
+  const double c11 = q.a00 * q.a22 - q.a02 * q.a02, c12 = q.a01 * q.a02 - q.a00 * q.a12,
+               c22 = q.a00 * q.a11 - q.a01 * q.a01;
+  const double t = q.a00 + q.a11 + q.a22, m = c00 + c11 + c22;
+  const double det = q.a00 * c00 + q.a01 * c01 + q.a02 * c02;
+  if (!std::isfinite(t) || !std::isfinite(m) || !std::isfinite(det)) return {Conditioning::kUnsure, {}};
+  if (!(t > 0.0)) return {Conditioning::kBad, {}};
+  // l1 <= l2 <= 3 M / T, so a small M settles it even when D is pure rounding (rank <= 1, flat regions).
+  if (9.0 * m < kMinEigenRatio * t * t) return {Conditioning::kBad, {}};
+  // Here the rounding of D (~1e-15 T^3) is far below kMinEigenRatio M T / 9 (>= ~1e-14 T^3): D's sign is
+  // meaningful, and a non-positive D is a rank-2 A (a straight crease, a cylinder).
+  const double mt = m * t;
+  if (!(det > 0.0) || 9.0 * det < kMinEigenRatio * mt) return {Conditioning::kBad, {}};
+  if (det < kMinEigenRatio * mt) return {Conditioning::kUnsure, {}};
+  // Adjugate (symmetric) times -b over det.
+  const double inv = -1.0 / det;
+  const glm::dvec3 x{inv * (c00 * q.b0 + c01 * q.b1 + c02 * q.b2), inv * (c01 * q.b0 + c11 * q.b1 + c12 * q.b2),
+                     inv * (c02 * q.b0 + c12 * q.b1 + c22 * q.b2)};
+  if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z)) return {Conditioning::kUnsure, {}};
+  return {Conditioning::kGood, x};
+}
+
 Vec<3> to_eigen(const glm::dvec3& p) { return {p.x, p.y, p.z}; }
 glm::dvec3 to_glm(const Vec<3>& x) { return {x(0), x(1), x(2)}; }
 
@@ -153,13 +187,6 @@ Quadric Quadric::from_border_edge(const glm::dvec3& p0, const glm::dvec3& p1, co
   return from_plane(m / len, -glm::dot(m, p0) / len, penalty * glm::dot(e, e));
 }
 
-Quadric& Quadric::operator+=(const Quadric& q) noexcept {
-  a00 += q.a00, a01 += q.a01, a02 += q.a02, a11 += q.a11, a12 += q.a12, a22 += q.a22;
-  b0 += q.b0, b1 += q.b1, b2 += q.b2;
-  c += q.c;
-  return *this;
-}
-
 Quadric Quadric::scaled(double s) const noexcept {
   return {s * a00, s * a01, s * a02, s * a11, s * a12, s * a22, s * b0, s * b1, s * b2, s * c};
 }
@@ -172,11 +199,34 @@ double Quadric::evaluate(const glm::dvec3& p) const noexcept {
 }
 
 QuadricOptimum Quadric::optimal(std::span<const glm::dvec3> candidates) const {
-  return to_public(optimal_impl(dense(*this), candidates, [](const glm::dvec3& p) { return to_eigen(p); }));
+  if (candidates.empty()) throw InvalidInput("quadric optimal(): no fallback candidates");
+  const Solve3 s = solve3(*this);
+  if (s.c == Conditioning::kGood) return {s.x, evaluate(s.x), true};
+  if (s.c == Conditioning::kUnsure)
+    return to_public(optimal_impl(dense(*this), candidates, [](const glm::dvec3& p) { return to_eigen(p); }));
+  QuadricOptimum best{candidates[0], evaluate(candidates[0]), false};
+  for (std::size_t i = 1; i < candidates.size(); ++i)
+    if (const double e = evaluate(candidates[i]); e < best.error) best = {candidates[i], e, false};
+  return best;
 }
 
 QuadricOptimum Quadric::optimal_on_segment(const glm::dvec3& p0, const glm::dvec3& p1) const noexcept {
-  return to_public(segment_impl(dense(*this), to_eigen(p0), to_eigen(p1)));
+  const Solve3 s = solve3(*this);
+  if (s.c == Conditioning::kGood) return {s.x, evaluate(s.x), true};
+  if (s.c == Conditioning::kUnsure) return to_public(segment_impl(dense(*this), to_eigen(p0), to_eigen(p1)));
+  // Same 1D minimisation as segment_impl, without the dense conversion.
+  const glm::dvec3 d = p1 - p0;
+  const glm::dvec3 ad{a00 * d.x + a01 * d.y + a02 * d.z, a01 * d.x + a11 * d.y + a12 * d.z,
+                      a02 * d.x + a12 * d.y + a22 * d.z};
+  const glm::dvec3 g{a00 * p0.x + a01 * p0.y + a02 * p0.z + b0, a01 * p0.x + a11 * p0.y + a12 * p0.z + b1,
+                     a02 * p0.x + a12 * p0.y + a22 * p0.z + b2};
+  const double dad = glm::dot(d, ad), gd = glm::dot(d, g);
+  const double t = dad > 0.0 ? std::clamp(-gd / dad, 0.0, 1.0) : 0.0;
+  QuadricOptimum best{p0 + t * d, 0.0, false};
+  best.error = evaluate(best.point);
+  for (const glm::dvec3* end : {&p0, &p1})
+    if (const double e = evaluate(*end); e < best.error) best = {*end, e, false};
+  return best;
 }
 
 AttributeQuadric AttributeQuadric::from_triangle(const AttributePoint& p0, const AttributePoint& p1,

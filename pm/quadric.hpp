@@ -63,7 +63,12 @@ struct Quadric {
   static Quadric from_border_edge(const glm::dvec3& p0, const glm::dvec3& p1, const glm::dvec3& p_opposite,
                                   double penalty = kDefaultBorderPenalty);
 
-  Quadric& operator+=(const Quadric& q) noexcept;
+  Quadric& operator+=(const Quadric& q) noexcept {  // inline: the analysis sums quadrics per candidate edge
+    a00 += q.a00, a01 += q.a01, a02 += q.a02, a11 += q.a11, a12 += q.a12, a22 += q.a22;
+    b0 += q.b0, b1 += q.b1, b2 += q.b2;
+    c += q.c;
+    return *this;
+  }
   friend Quadric operator+(Quadric p, const Quadric& q) noexcept { return p += q; }
   /// s * this; s >= 0 keeps the quadric PSD.
   Quadric scaled(double s) const noexcept;
