@@ -673,9 +673,9 @@ void synthesis(const Options& o, const TriMesh& m, const char* name, std::vector
   const std::string hname = "smallest base, depth " + std::to_string(h.max_depth());
   std::printf("hierarchy: %zu leaves, %zu collapses, %zu roots, %zu base faces, depth %d, built in %.2f s wall\n", h.num_leaves(),
               h.num_collapses(), h.num_roots(), h.base_faces().size(), h.max_depth(), st.seconds);
-  const double sr_bytes = 24.0 * static_cast<double>(h.num_faces()) + 10.0 * static_cast<double>(h.num_nodes());
-  std::printf("memory: VertexHierarchy::memory_bytes() = %zu = %.1f bytes per original face; SrMesh arrays %.1f bytes per "
-              "original face (corners + adjacency 24 per face slot, 10 per node)\n",
+  const double sr_bytes = static_cast<double>(SrMesh(h).memory_bytes());
+  std::printf("memory: VertexHierarchy::memory_bytes() = %zu = %.1f bytes per original face; SrMesh::memory_bytes() %.1f "
+              "bytes per original face\n",
               h.memory_bytes(), static_cast<double>(h.memory_bytes()) / static_cast<double>(h.num_faces()),
               sr_bytes / static_cast<double>(h.num_faces()));
   rows.push_back(synth_varmesh(h, name, hname, o.reps));

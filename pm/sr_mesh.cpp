@@ -9,6 +9,7 @@
 #include "pm/sr_mesh.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <stdexcept>
 #include <string>
 
@@ -27,35 +28,37 @@ const char* scheme_name(RefinementScheme s) noexcept {
 
 namespace {
 constexpr int kXvMaxDepth = 200;
-inline int corner_of(const std::vector<Index>& corners, Index f, Index v) {
-  return corners[3 * f] == v ? 0 : (corners[3 * f + 1] == v ? 1 : 2);
-}
+// Rings longer than this look for cut vertices by walking up from the leaf and for common neighbours with
+// stamps; shorter ones (nearly all: valence ~6) compare in registers and test the section 4.3 keys.
+constexpr std::size_t kLongRing = 32;
+constexpr std::size_t kRingStart = 64;
 }  // namespace
 
 SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), scheme_(scheme) {
+  // Half-edge ids are 4 * face + corner in 32 bits.
+  if (h.num_faces() >= (std::size_t{1} << 30))
+    throw InvalidInput("SrMesh: " + std::to_string(h.num_faces()) + " faces exceed the 2^30 - 1 supported");
   num_slots_ = static_cast<Index>(h.num_faces());
-  corners_.assign(3 * static_cast<std::size_t>(num_slots_), kInvalid);
-  adj_.assign(3 * static_cast<std::size_t>(num_slots_), kInvalid);
-  vface_.assign(h.num_nodes(), kInvalid);
+  faces_.resize(num_slots_);
+  nodes_.resize(h.num_nodes());
   state_.assign(h.num_nodes(), 0);
   mark_.assign(h.num_nodes(), 0);
   in_progress_.assign(h.num_nodes(), 0);
+  vu_of_vt_.assign(h.num_nodes(), kInvalid);
+  keys_.resize(h.num_nodes());
+  for (std::size_t v = 0; v < h.num_nodes(); ++v) keys_[v] = h.key(static_cast<Index>(v)).value;
+  for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
+    const CollapseRecord& r = h.record(static_cast<Index>(v));
+    vu_of_vt_[r.vt] = r.vu;
+  }
+  active_list_.reserve(h.num_leaves());
+  for (Ring* ring : {&ring_, &ring2_}) ring->buf.resize(2 * kRingStart);
+  nbrs_.reserve(kLongRing + 1);
+  build_base();
   reset();
 }
 
-void SrMesh::reset() {
-  std::fill(corners_.begin(), corners_.end(), kInvalid);
-  std::fill(adj_.begin(), adj_.end(), kInvalid);
-  std::fill(vface_.begin(), vface_.end(), kInvalid);
-  std::fill(state_.begin(), state_.end(), std::uint8_t{0});
-  active_list_.clear();
-  active_pos_.assign(h_->num_nodes(), kInvalid);
-  for (Index r : h_->roots()) {
-    state_[r] = 1;
-    activate(r);
-  }
-  num_active_ = h_->num_roots();
-  num_faces_ = 0;
+void SrMesh::build_base() {
   // Root of each leaf: nodes are numbered children first, so propagate from the top down.
   std::vector<Index> top(h_->num_nodes());
   for (std::size_t v = h_->num_nodes(); v-- > 0;) {
@@ -65,19 +68,43 @@ void SrMesh::reset() {
   std::vector<std::pair<std::uint64_t, Index>> edges;
   for (Index f : h_->base_faces()) {
     const auto c = h_->face(f);
-    for (int k = 0; k < 3; ++k) corners_[3 * f + k] = top[c[k]];
-    for (int k = 0; k < 3; ++k) {
-      vface_[corners_[3 * f + k]] = f;
-      edges.push_back({(static_cast<std::uint64_t>(corners_[3 * f + k]) << 32) | corners_[3 * f + (k + 1) % 3], 3 * f + k});
-    }
-    ++num_faces_;
+    FaceSlot fs{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}};
+    for (int k = 0; k < 3; ++k) fs.v[static_cast<std::size_t>(k)] = top[c[static_cast<std::size_t>(k)]];
+    faces_[f] = fs;
+    for (Index k = 0; k < 3; ++k)
+      edges.push_back({(static_cast<std::uint64_t>(fs.v[k]) << 32) | fs.v[next_corner(k)], he(f, static_cast<int>(k))});
   }
   std::sort(edges.begin(), edges.end());
-  for (const auto& [key, slot] : edges) {
+  for (const auto& [key, h] : edges) {
     const std::uint64_t twin = (key << 32) | (key >> 32);
     const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<std::uint64_t, Index>{twin, 0});
-    if (it != edges.end() && it->first == twin) adj_[slot] = it->second / 3;
+    if (it != edges.end() && it->first == twin) faces_[h >> 2].twin[h & 3] = it->second;
   }
+  base_slots_.clear();
+  for (Index f : h_->base_faces()) base_slots_.push_back({f, faces_[f]});
+  std::vector<Index> corner(h_->num_nodes(), kInvalid);
+  for (const auto& [f, fs] : base_slots_)
+    for (int k = 0; k < 3; ++k) corner[fs.v[static_cast<std::size_t>(k)]] = he(f, k);
+  base_corners_.clear();
+  for (Index r : h_->roots()) base_corners_.push_back(corner[r]);
+}
+
+void SrMesh::reset() {
+  // Back to the base mesh saved by build_base(). Only active nodes have a non-default NodeSlot.
+  ecn_for_ = kInvalid;
+  for (Index v : active_list_) nodes_[v] = NodeSlot{};
+  active_list_.clear();
+  std::fill(faces_.begin(), faces_.end(), FaceSlot{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}});
+  std::fill(state_.begin(), state_.end(), std::uint8_t{0});
+  const auto roots = h_->roots();
+  for (std::size_t i = 0; i < roots.size(); ++i) {
+    state_[roots[i]] = 1;
+    activate(roots[i]);
+    nodes_[roots[i]].corner = base_corners_[i];
+  }
+  for (const auto& [f, fs] : base_slots_) faces_[f] = fs;
+  num_active_ = h_->num_roots();
+  num_faces_ = base_slots_.size();
 }
 
 void SrMesh::check_node(Index v, const char* what) const {
@@ -85,103 +112,149 @@ void SrMesh::check_node(Index v, const char* what) const {
   if (h_->is_leaf(v)) throw InvalidInput(std::string(what) + ": node " + std::to_string(v) + " is a leaf");
 }
 
-bool SrMesh::gather_ring(Index v, std::vector<RingFace>& ring) const {
-  // Counter-clockwise from the stored face; only when a border stops the walk, the clockwise part before
-  // the stored face is walked too and put in front (so an interior vertex costs one turn).
-  ring.clear();
-  const Index f0 = vface_[v];
-  Index f = f0;
-  for (;;) {
-    const int k = corner_of(corners_, f, v);
-    ring.push_back({f, k});
-    const Index next = adj_[3 * f + (k + 2) % 3];
-    if (next == f0) return true;
-    if (next == kInvalid) break;
-    f = next;
+// A ring is walked from its start half-edge both ways, counter-clockwise (growing at hi) and clockwise (at
+// lo), one step of each per call: the ring is a chain of dependent loads, and two chains halve its latency
+// (four when two rings are walked together). An open fan ends with both walks on the border, which leaves
+// it in order from its clockwise end.
+void SrMesh::ring_begin(Index start, Ring& ring, bool prefetch_keys) const {
+  ring.lo = ring.buf.size() / 2;
+  ring.hi = ring.lo + 1;
+  ring.buf[ring.lo] = ring.fwd = ring.back = start;
+  ring.fwd_open = ring.back_open = true;
+  ring.closed = false;
+  ring.prefetch_keys = prefetch_keys;
+  if (prefetch_keys) prefetch_line(&keys_[head(start)]);
+}
+
+inline bool SrMesh::ring_step(Ring& ring) const {
+  Index* buf = ring.buf.data();
+  if (ring.fwd_open) {
+    // Across the edge entering the centre: the twin half-edge leaves the centre.
+    const Index n = faces_[ring.fwd >> 2].twin[prev_corner(ring.fwd & 3)];
+    if (n == buf[ring.lo]) return ring.closed = true;
+    if (n == kInvalid) {
+      ring.fwd_open = false;
+    } else {
+      buf[ring.hi++] = ring.fwd = n;
+      if (ring.prefetch_keys) prefetch_line(&keys_[head(n)]);
+    }
   }
-  const std::size_t ccw = ring.size();
-  f = f0;
-  for (;;) {
-    const Index prev = adj_[3 * f + corner_of(corners_, f, v)];
-    if (prev == kInvalid) break;
-    f = prev;
-    ring.push_back({f, corner_of(corners_, f, v)});
+  if (ring.back_open) {
+    // Across the edge leaving the centre: the twin enters it, its next half-edge leaves it.
+    const Index t = faces_[ring.back >> 2].twin[ring.back & 3];
+    const Index p = t == kInvalid ? kInvalid : (t & ~Index{3}) | next_corner(t & 3);
+    if (p == buf[ring.hi - 1]) return ring.closed = true;
+    if (p == kInvalid) {
+      ring.back_open = false;
+    } else {
+      buf[--ring.lo] = ring.back = p;
+      if (ring.prefetch_keys) prefetch_line(&keys_[head(p)]);
+    }
   }
-  std::reverse(ring.begin() + static_cast<std::ptrdiff_t>(ccw), ring.end());
-  std::rotate(ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(ccw), ring.end());
+  if (!ring.fwd_open && !ring.back_open) return true;
+  if (ring.lo == 0 || ring.hi == ring.buf.size()) {
+    if (ring.size() > 3 * static_cast<std::size_t>(num_slots_))
+      throw std::logic_error("SrMesh: the fan of node " + std::to_string(corner_node(ring.fwd)) + " does not end");
+    std::vector<Index> grown(2 * ring.buf.size());
+    const std::size_t lo = ring.buf.size() - ring.size() / 2;
+    std::copy(buf + ring.lo, buf + ring.hi, grown.data() + lo);
+    ring.hi = lo + ring.size();
+    ring.lo = lo;
+    ring.buf.swap(grown);
+  }
   return false;
 }
 
-Index SrMesh::find_cut_vertex(Index leaf, std::span<const RingFace> ring, bool closed) const {
-  for (const RingFace& rf : ring) {
-    const Index n = neighbor_a(rf);
-    if (h_->is_ancestor_or_self(n, leaf)) return n;
+void SrMesh::gather_ring(Index start, Ring& ring, bool prefetch_keys) const {
+  ring_begin(start, ring, prefetch_keys);
+  while (!ring_step(ring)) {
   }
-  if (!closed && !ring.empty()) {
-    const Index n = neighbor_b(ring.back());
-    if (h_->is_ancestor_or_self(n, leaf)) return n;
-  }
-  return kInvalid;
 }
 
-void SrMesh::do_vsplit(Index vs, Index vl, Index vr, bool closed) {
-  // ring_ holds the 1-ring of vs (gather_ring), `closed` its kind.
+void SrMesh::gather_rings(Index start_a, Ring& a, Index start_b, Ring& b) const {
+  ring_begin(start_a, a, false);
+  ring_begin(start_b, b, false);
+  bool done_a = false, done_b = false;
+  while (!done_a || !done_b) {
+    if (!done_a) done_a = ring_step(a);
+    if (!done_b) done_b = ring_step(b);
+  }
+}
+
+Index SrMesh::active_ancestor(Index leaf) const noexcept {
+  Index a = leaf;
+  while (a != kInvalid && state_[a] != 1) a = h_->parent(a);
+  return a;
+}
+
+void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
+  // ring_ holds the 1-ring of vs, pl/pr the places of vl/vr among its neighbours (-1 when absent).
+  ecn_for_ = kInvalid;
   const CollapseRecord& r = h_->record(vs);
-  const int m = static_cast<int>(ring_.size());
-  const int nn = closed ? m : m + 1;  // neighbours a_0 .. a_{m-1} (+ b_{m-1} when open)
-  auto nb = [&](int i) { return i < m ? neighbor_a(ring_[static_cast<std::size_t>(i)]) : neighbor_b(ring_.back()); };
-  int pl = -1, pr = -1;
-  for (int i = 0; i < nn; ++i) {
-    const Index n = nb(i);
-    if (n == vl) pl = i;
-    if (n == vr) pr = i;
-  }
-  if ((vl != kInvalid && pl < 0) || (vr != kInvalid && pr < 0))
-    throw std::logic_error("SrMesh: cut vertex of node " + std::to_string(vs) + " not in its 1-ring");
-  auto goes_to_t = [&](int j) {
-    // On an open fan with both cut vertices, pl > pr means vt takes both ends of the fan (vt stays on the
-    // border, vu becomes interior); pl < pr the other way round.
-    if (pl >= 0 && pr >= 0) return pl <= pr ? (j >= pl && j < pr) : (j >= pl || j < pr);
-    return pr >= 0 ? j < pr : j >= pl;
+  const Ring& ring = ring_;
+  const int m = static_cast<int>(ring.size());
+  const Index* hs = ring.buf.data() + ring.lo;
+  auto assign = [&](int from, int to, Index v) {
+    for (int j = from; j < to; ++j) faces_[hs[j] >> 2].v[hs[j] & 3] = v;
   };
-  for (int j = 0; j < m; ++j) {
-    const RingFace& rf = ring_[static_cast<std::size_t>(j)];
-    corners_[3 * rf.face + rf.corner] = goes_to_t(j) ? r.vt : r.vu;
+  // Faces from vl to vr (counter-clockwise) go to vt, the others to vu. On an open fan with both cut
+  // vertices, pl > pr means vt takes both ends of the fan (vt stays on the border, vu becomes interior).
+  if (pl >= 0 && pr >= 0) {
+    if (pl <= pr) {
+      assign(0, pl, r.vu), assign(pl, pr, r.vt), assign(pr, m, r.vu);
+    } else {
+      assign(0, pr, r.vt), assign(pr, pl, r.vu), assign(pl, m, r.vt);
+    }
+  } else if (pr >= 0) {
+    assign(0, std::min(pr, m), r.vt), assign(std::min(pr, m), m, r.vu);
+  } else {
+    const int from = std::clamp(pl, 0, m);
+    assign(0, from, r.vu), assign(from, m, r.vt);
   }
-  auto face_at = [&](int j) -> const RingFace* {
-    if (closed) return &ring_[static_cast<std::size_t>(((j % m) + m) % m)];
-    return (j >= 0 && j < m) ? &ring_[static_cast<std::size_t>(j)] : nullptr;
+  auto at = [&](int j) -> Index {
+    if (ring.closed) {
+      // j is within a turn of [0, m): wrap without a division.
+      while (j < 0) j += m;
+      while (j >= m) j -= m;
+      return hs[j];
+    }
+    return (j >= 0 && j < m) ? hs[j] : kInvalid;
   };
+  // The half-edge of ring face `h` that enters the centre: its previous corner's.
+  auto entering = [](Index h) { return (h & ~Index{3}) | prev_corner(h & 3); };
   const Index fl = r.fl_hat, fr = r.fr_hat;
   if (fl != kInvalid) {
-    corners_[3 * fl] = r.vt;
-    corners_[3 * fl + 1] = r.vu;
-    corners_[3 * fl + 2] = vl;
-    adj_[3 * fl] = fr;
-    const RingFace* a = face_at(pl - 1);  // (vu, x, vl): its edge vl -> vu
-    const RingFace* b = face_at(pl);      // (vt, vl, y): its edge vt -> vl
-    adj_[3 * fl + 1] = a ? a->face : kInvalid;
-    adj_[3 * fl + 2] = b ? b->face : kInvalid;
-    if (a) adj_[3 * a->face + (a->corner + 2) % 3] = fl;
-    if (b) adj_[3 * b->face + b->corner] = fl;
+    FaceSlot& f = faces_[fl];
+    f.v = {r.vt, r.vu, vl};
+    f.twin[0] = fr != kInvalid ? he(fr, 0) : kInvalid;
+    const Index a = at(pl - 1);  // (vu, x, vl): its edge vl -> vu faces fl's edge vu -> vl
+    const Index b = at(pl);      // (vt, vl, y): its edge vt -> vl faces fl's edge vl -> vt
+    f.twin[1] = a != kInvalid ? entering(a) : kInvalid;
+    f.twin[2] = b;
+    if (a != kInvalid) faces_[a >> 2].twin[prev_corner(a & 3)] = he(fl, 1);
+    if (b != kInvalid) faces_[b >> 2].twin[b & 3] = he(fl, 2);
     ++num_faces_;
   }
   if (fr != kInvalid) {
-    corners_[3 * fr] = r.vu;
-    corners_[3 * fr + 1] = r.vt;
-    corners_[3 * fr + 2] = vr;
-    adj_[3 * fr] = fl;
-    const RingFace* c = face_at(pr - 1);  // (vt, x, vr): its edge vr -> vt
-    const RingFace* d = face_at(pr);      // (vu, vr, y): its edge vu -> vr
-    adj_[3 * fr + 1] = c ? c->face : kInvalid;
-    adj_[3 * fr + 2] = d ? d->face : kInvalid;
-    if (c) adj_[3 * c->face + (c->corner + 2) % 3] = fr;
-    if (d) adj_[3 * d->face + d->corner] = fr;
+    FaceSlot& f = faces_[fr];
+    f.v = {r.vu, r.vt, vr};
+    f.twin[0] = fl != kInvalid ? he(fl, 0) : kInvalid;
+    const Index c = at(pr - 1);  // (vt, x, vr): its edge vr -> vt
+    const Index d = at(pr);      // (vu, vr, y): its edge vu -> vr
+    f.twin[1] = c != kInvalid ? entering(c) : kInvalid;
+    f.twin[2] = d;
+    if (c != kInvalid) faces_[c >> 2].twin[prev_corner(c & 3)] = he(fr, 1);
+    if (d != kInvalid) faces_[d >> 2].twin[d & 3] = he(fr, 2);
     ++num_faces_;
   }
-  const Index any = fl != kInvalid ? fl : fr;
-  vface_[r.vt] = vface_[r.vu] = any;
-  vface_[vs] = kInvalid;
+  if (fl != kInvalid) {
+    nodes_[r.vt].corner = he(fl, 0);
+    nodes_[r.vu].corner = he(fl, 1);
+  } else {
+    nodes_[r.vu].corner = he(fr, 0);
+    nodes_[r.vt].corner = he(fr, 1);
+  }
+  nodes_[vs].corner = kInvalid;
   state_[vs] = 2;
   state_[r.vt] = state_[r.vu] = 1;
   deactivate(vs);
@@ -194,35 +267,39 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, bool closed) {
 
 void SrMesh::do_ecol(Index vs) {
   // ring_ and ring2_ hold the 1-rings of vt and vu (left there by extra_common_neighbors).
+  ecn_for_ = kInvalid;
   const CollapseRecord& r = h_->record(vs);
-  for (const auto* ring : {&ring_, &ring2_})
-    for (const RingFace& rf : *ring) corners_[3 * rf.face + rf.corner] = vs;
-  Index keep = kInvalid;
-  auto relink = [&](Index dying, Index x, Index y) {
-    // x and y were across two edges of `dying`; they become neighbours of each other.
-    if (x != kInvalid)
-      for (int k = 0; k < 3; ++k)
-        if (adj_[3 * x + k] == dying) adj_[3 * x + k] = y;
-    if (y != kInvalid)
-      for (int k = 0; k < 3; ++k)
-        if (adj_[3 * y + k] == dying) adj_[3 * y + k] = x;
-    if (keep == kInvalid) keep = x != kInvalid ? x : y;
-  };
+  for (Index v : {vs, r.vt, r.vu}) prefetch_line(&nodes_[v]);
+  prefetch_line(&nodes_[active_list_.back()]);
+  if (active_list_.size() > 1) prefetch_line(&nodes_[active_list_[active_list_.size() - 2]]);
+  for (const Ring* ring : {&ring_, &ring2_})
+    for (std::size_t i = ring->lo; i < ring->hi; ++i) {
+      const Index h = ring->buf[i];
+      faces_[h >> 2].v[h & 3] = vs;
+    }
+  Index keep = kInvalid;  // a half-edge leaving vs
   auto kill = [&](Index f, Index apex) {
+    // The half-edges x and y across f's edges 1 and 2 become twins. x leaves the apex (its next corner is
+    // vs); y leaves vs (its next corner is the apex).
     if (f == kInvalid) return;
-    const Index x = adj_[3 * f + 1], y = adj_[3 * f + 2];
-    relink(f, x, y);
-    if (vface_[apex] == f) vface_[apex] = x != kInvalid ? x : y;
-    for (int k = 0; k < 3; ++k) corners_[3 * f + k] = adj_[3 * f + k] = kInvalid;
+    FaceSlot& fs = faces_[f];
+    const Index x = fs.twin[1], y = fs.twin[2];
+    if (x != kInvalid) faces_[x >> 2].twin[x & 3] = y;
+    if (y != kInvalid) faces_[y >> 2].twin[y & 3] = x;
+    const Index x_next = x != kInvalid ? (x & ~Index{3}) | next_corner(x & 3) : kInvalid;
+    const Index y_next = y != kInvalid ? (y & ~Index{3}) | next_corner(y & 3) : kInvalid;
+    if (keep == kInvalid) keep = x != kInvalid ? x_next : y;
+    if (nodes_[apex].corner >> 2 == f) nodes_[apex].corner = x != kInvalid ? x : y_next;
+    fs = FaceSlot{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}};
     --num_faces_;
   };
-  const Index vl = r.fl_hat != kInvalid ? corners_[3 * r.fl_hat + 2] : kInvalid;
-  const Index vr = r.fr_hat != kInvalid ? corners_[3 * r.fr_hat + 2] : kInvalid;
+  const Index vl = r.fl_hat != kInvalid ? faces_[r.fl_hat].v[2] : kInvalid;
+  const Index vr = r.fr_hat != kInvalid ? faces_[r.fr_hat].v[2] : kInvalid;
   kill(r.fl_hat, vl);
   kill(r.fr_hat, vr);
   if (keep == kInvalid) throw std::logic_error("SrMesh: ecol of node " + std::to_string(vs) + " leaves it without a face");
-  vface_[vs] = keep;
-  vface_[r.vt] = vface_[r.vu] = kInvalid;
+  nodes_[vs].corner = keep;
+  nodes_[r.vt].corner = nodes_[r.vu].corner = kInvalid;
   state_[vs] = 1;
   state_[r.vt] = state_[r.vu] = 0;
   deactivate(r.vt);
@@ -233,25 +310,49 @@ void SrMesh::do_ecol(Index vs) {
 }
 
 bool SrMesh::extra_common_neighbors(Index vs) const {
+  // Section 4.4: do vt and vu share a neighbour besides the cut vertices? The rings start at fl (or fr),
+  // whose corners 0 and 1 are vt and vu (fr's the other way round), which spares two vertex lookups.
+  // The answer and the rings are kept until the mesh or ring_ changes: update() asks is_coarsenable(e)
+  // and then coarsen_one(e), which need the same walk.
+  if (ecn_for_ == vs) return ecn_result_;
+  ecn_for_ = vs;
+  ecn_result_ = extra_common_neighbors_walk(vs);
+  return ecn_result_;
+}
+
+bool SrMesh::extra_common_neighbors_walk(Index vs) const {
   const CollapseRecord& r = h_->record(vs);
-  const Index vl = r.fl_hat != kInvalid ? corners_[3 * r.fl_hat + 2] : kInvalid;
-  const Index vr = r.fr_hat != kInvalid ? corners_[3 * r.fr_hat + 2] : kInvalid;
+  if (r.fl_hat != kInvalid) prefetch_line(&faces_[r.fl_hat]);
+  if (r.fr_hat != kInvalid) prefetch_line(&faces_[r.fr_hat]);
+  const Index vl = r.fl_hat != kInvalid ? faces_[r.fl_hat].v[2] : kInvalid;
+  const Index vr = r.fr_hat != kInvalid ? faces_[r.fr_hat].v[2] : kInvalid;
+  const Index f = r.fl_hat != kInvalid ? r.fl_hat : r.fr_hat;
+  const bool fl_side = r.fl_hat != kInvalid;
+  gather_rings(he(f, fl_side ? 0 : 1), ring_, he(f, fl_side ? 1 : 0), ring2_);
+  const std::size_t nt = ring_.size() + (ring_.closed ? 0 : 1), nu = ring2_.size() + (ring2_.closed ? 0 : 1);
+  auto candidate = [&](Index n) { return n != vl && n != vr && n != r.vt; };
+  if (nt <= kLongRing && nu <= kLongRing) {
+    nbrs_.clear();
+    for (std::size_t i = 0; i < nt; ++i) nbrs_.push_back(ring_neighbor(ring_, i));
+    for (std::size_t i = 0; i < nu; ++i) {
+      const Index n = ring_neighbor(ring2_, i);
+      if (candidate(n) && std::find(nbrs_.begin(), nbrs_.end(), n) != nbrs_.end()) return true;
+    }
+    return false;
+  }
   ++stamp_;
-  const bool closed_t = gather_ring(r.vt, ring_);
-  for (const RingFace& rf : ring_) mark_[neighbor_a(rf)] = stamp_;
-  if (!closed_t && !ring_.empty()) mark_[neighbor_b(ring_.back())] = stamp_;
-  const bool closed_u = gather_ring(r.vu, ring2_);
-  auto extra = [&](Index n) { return n != vl && n != vr && n != r.vt && mark_[n] == stamp_; };
-  for (const RingFace& rf : ring2_)
-    if (extra(neighbor_a(rf))) return true;
-  if (!closed_u && !ring2_.empty() && extra(neighbor_b(ring2_.back()))) return true;
+  for (std::size_t i = 0; i < nt; ++i) mark_[ring_neighbor(ring_, i)] = stamp_;
+  for (std::size_t i = 0; i < nu; ++i) {
+    const Index n = ring_neighbor(ring2_, i);
+    if (candidate(n) && mark_[n] == stamp_) return true;
+  }
   return false;
 }
 
 bool SrMesh::hoppe_ecol_legal(Index vs) const {
   const CollapseRecord& r = h_->record(vs);
-  if (r.fl_hat != kInvalid && (adj_[3 * r.fl_hat + 1] != r.fn[0] || adj_[3 * r.fl_hat + 2] != r.fn[1])) return false;
-  if (r.fr_hat != kInvalid && (adj_[3 * r.fr_hat + 1] != r.fn[2] || adj_[3 * r.fr_hat + 2] != r.fn[3])) return false;
+  if (r.fl_hat != kInvalid && (neighbor(r.fl_hat, 1) != r.fn[0] || neighbor(r.fl_hat, 2) != r.fn[1])) return false;
+  if (r.fr_hat != kInvalid && (neighbor(r.fr_hat, 1) != r.fn[2] || neighbor(r.fr_hat, 2) != r.fn[3])) return false;
   return true;
 }
 
@@ -275,11 +376,58 @@ bool SrMesh::can_ecol(Index vs) const {
 
 bool SrMesh::vsplit_kim_lee(Index vs) {
   const CollapseRecord& r = h_->record(vs);
+  const int bits = h_->node_bits();
+  const std::uint64_t mask = bits >= 64 ? ~0ull : (1ull << bits) - 1ull;
+  // Section 4.3's ancestor test against a fixed leaf, with the leaf's parts computed once.
+  struct Leaf {
+    std::uint64_t tree = 0, node = 0;
+    int len = 0;
+  };
+  auto leaf_of = [&](Index leaf) {
+    const std::uint64_t k = keys_[leaf];
+    return Leaf{k >> bits, k & mask, static_cast<int>(std::bit_width(k & mask))};
+  };
+  auto is_ancestor = [&](std::uint64_t k, const Leaf& l) {
+    const std::uint64_t n = k & mask;
+    const int len = static_cast<int>(std::bit_width(n));
+    return (k >> bits) == l.tree && len <= l.len && (l.node >> (l.len - len)) == n;
+  };
+  const bool has_l = r.vl_hat != kInvalid, has_r = r.vr_hat != kInvalid;
+  // The split's scattered writes are known from the record alone: asking for their lines now overlaps
+  // those cache misses with the ring walk instead of paying them one after another.
+  prefetch_line(&nodes_[r.vt]);
+  prefetch_line(&nodes_[r.vu]);
+  prefetch_line(&nodes_[active_list_.back()]);
+  if (r.fl_hat != kInvalid) prefetch_line(&faces_[r.fl_hat]);
+  if (r.fr_hat != kInvalid) prefetch_line(&faces_[r.fr_hat]);
+  const Leaf kl = has_l ? leaf_of(r.vl_hat) : Leaf{}, kr = has_r ? leaf_of(r.vr_hat) : Leaf{};
   for (;;) {
-    const bool closed = gather_ring(vs, ring_);
-    const Index vl = r.vl_hat != kInvalid ? find_cut_vertex(r.vl_hat, ring_, closed) : kInvalid;
-    const Index vr = r.vr_hat != kInvalid ? find_cut_vertex(r.vr_hat, ring_, closed) : kInvalid;
-    if ((r.vl_hat != kInvalid && vl == kInvalid) || (r.vr_hat != kInvalid && vr == kInvalid))
+    ecn_for_ = kInvalid;  // ring_ is overwritten
+    gather_ring(nodes_[vs].corner, ring_, true);
+    const std::size_t nn = ring_.size() + (ring_.closed ? 0 : 1);
+    Index vl = kInvalid, vr = kInvalid;
+    int pl = -1, pr = -1;
+    if (nn <= kLongRing) {
+      // The cut vertices are the ring neighbours that are ancestors of vl^ and vr^ (the first found; the
+      // last place of that vertex is kept, as a physical split needs one place per cut vertex).
+      for (std::size_t i = 0; i < nn; ++i) {
+        const Index n = ring_neighbor(ring_, i);
+        if (has_l && vl == kInvalid && is_ancestor(keys_[n], kl)) vl = n;
+        if (has_r && vr == kInvalid && is_ancestor(keys_[n], kr)) vr = n;
+        if (n == vl) pl = static_cast<int>(i);
+        if (n == vr) pr = static_cast<int>(i);
+      }
+    } else {
+      // A high-valence vertex (the coarse side of an adaptive mesh): the one active ancestor of each leaf
+      // is found by walking up in O(depth) instead of testing every neighbour; then its place in the ring.
+      const Index al = has_l ? active_ancestor(r.vl_hat) : kInvalid, ar = has_r ? active_ancestor(r.vr_hat) : kInvalid;
+      for (std::size_t i = 0; i < nn; ++i) {
+        const Index n = ring_neighbor(ring_, i);
+        if (n == al) vl = n, pl = static_cast<int>(i);
+        if (n == ar) vr = n, pr = static_cast<int>(i);
+      }
+    }
+    if ((has_l && vl == kInvalid) || (has_r && vr == kInvalid))
       throw std::logic_error("SrMesh: no cut vertex of node " + std::to_string(vs) + " in its 1-ring");
     if (vl != kInvalid && vl == vr) {
       // Section 4.4: both cut vertices are one active vertex; split it first.
@@ -287,7 +435,7 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
       vsplit_kim_lee(vl);
       continue;
     }
-    do_vsplit(vs, vl, vr, closed);
+    do_vsplit(vs, vl, vr, pl, pr);
     return true;
   }
 }
@@ -486,50 +634,66 @@ void SrMesh::validate() const {
   std::size_t faces = 0, active = 0;
   std::vector<Index> incident(state_.size(), 0);
   for (Index f = 0; f < num_slots_; ++f) {
-    if (corners_[3 * f] == kInvalid) continue;
+    const FaceSlot& fs = faces_[f];
+    if (fs.v[0] == kInvalid) {
+      if (fs.v[1] != kInvalid || fs.v[2] != kInvalid || fs.twin[0] != kInvalid || fs.twin[1] != kInvalid || fs.twin[2] != kInvalid)
+        fail("inactive face " + std::to_string(f) + " not cleared");
+      continue;
+    }
     ++faces;
     const std::string name = "face " + std::to_string(f);
-    for (int k = 0; k < 3; ++k) {
-      const Index v = corners_[3 * f + k];
-      if (v == kInvalid || state_[v] != 1) fail(name + ": corner " + std::to_string(v) + " not active");
+    for (Index k = 0; k < 3; ++k) {
+      const Index v = fs.v[k];
+      if (v == kInvalid || v >= state_.size() || state_[v] != 1) fail(name + ": corner " + std::to_string(v) + " not active");
       ++incident[v];
-      const Index w = corners_[3 * f + (k + 1) % 3];
+      const Index w = fs.v[next_corner(k)];
       if (v == w) fail(name + ": repeated corner");
-      const Index n = adj_[3 * f + k];
-      if (n == kInvalid) continue;
-      if (corners_[3 * n] == kInvalid) fail(name + ": neighbour " + std::to_string(n) + " inactive");
-      bool back = false;
-      for (int j = 0; j < 3; ++j)
-        if (corners_[3 * n + j] == w && corners_[3 * n + (j + 1) % 3] == v && adj_[3 * n + j] == f) back = true;
-      if (!back) fail(name + ": neighbour " + std::to_string(n) + " across edge " + std::to_string(k) + " does not match back");
+      const Index t = fs.twin[k];
+      if (t == kInvalid) continue;
+      const Index n = t >> 2;
+      if (n >= num_slots_ || (t & 3) == 3) fail(name + ": twin " + std::to_string(t) + " out of range");
+      if (faces_[n].v[0] == kInvalid) fail(name + ": neighbour " + std::to_string(n) + " inactive");
+      if (faces_[n].v[t & 3] != w || faces_[n].v[next_corner(t & 3)] != v || faces_[n].twin[t & 3] != he(f, static_cast<int>(k)))
+        fail(name + ": neighbour " + std::to_string(n) + " across edge " + std::to_string(k) + " does not match back");
     }
   }
   if (faces != num_faces_) fail("face count");
+  Ring ring;
+  ring.buf.resize(2 * kRingStart);
   for (std::size_t v = 0; v < state_.size(); ++v) {
     const Index p = h_->parent(static_cast<Index>(v));
     if (state_[v] == 1) {
       ++active;
       if (p != kInvalid && state_[p] != 2) fail("node " + std::to_string(v) + ": active under a parent that is not refined");
       if (incident[v] == 0) fail("node " + std::to_string(v) + ": active without a face");
-      const Index f = vface_[v];
-      if (f == kInvalid || corners_[3 * f] == kInvalid ||
-          (corners_[3 * f] != v && corners_[3 * f + 1] != v && corners_[3 * f + 2] != v))
-        fail("node " + std::to_string(v) + ": incident face wrong");
-      std::vector<RingFace> ring;
-      gather_ring(static_cast<Index>(v), ring);
+      const Index c = nodes_[v].corner;
+      if (c == kInvalid || (c >> 2) >= num_slots_ || (c & 3) == 3 || corner_node(c) != v)
+        fail("node " + std::to_string(v) + ": incident corner wrong");
+      gather_ring(c, ring);
       if (ring.size() != incident[v]) fail("node " + std::to_string(v) + ": faces form more than one fan");
-    } else if (state_[v] == 2) {
-      if (p != kInvalid && state_[p] != 2) fail("node " + std::to_string(v) + ": refined under a parent that is not refined");
-      const CollapseRecord& r = h_->record(static_cast<Index>(v));
-      if (state_[r.vt] == 0 || state_[r.vu] == 0) fail("node " + std::to_string(v) + ": refined with an inactive child below");
-    } else if (p != kInvalid && state_[p] == 2) {
-      fail("node " + std::to_string(v) + ": below the front under a refined parent");
+    } else {
+      if (nodes_[v].corner != kInvalid) fail("node " + std::to_string(v) + ": inactive with an incident corner");
+      if (state_[v] == 2) {
+        if (p != kInvalid && state_[p] != 2) fail("node " + std::to_string(v) + ": refined under a parent that is not refined");
+        const CollapseRecord& r = h_->record(static_cast<Index>(v));
+        if (state_[r.vt] == 0 || state_[r.vu] == 0) fail("node " + std::to_string(v) + ": refined with an inactive child below");
+      } else if (p != kInvalid && state_[p] == 2) {
+        fail("node " + std::to_string(v) + ": below the front under a refined parent");
+      }
     }
   }
   if (active != num_active_) fail("active count");
   if (active_list_.size() != num_active_) fail("active list size");
   for (std::size_t i = 0; i < active_list_.size(); ++i)
-    if (state_[active_list_[i]] != 1 || active_pos_[active_list_[i]] != i) fail("active list entry " + std::to_string(i));
+    if (state_[active_list_[i]] != 1 || nodes_[active_list_[i]].active_pos != i) fail("active list entry " + std::to_string(i));
+  for (std::size_t v = 0; v < state_.size(); ++v)
+    if (state_[v] != 1 && nodes_[v].active_pos != kInvalid) fail("node " + std::to_string(v) + ": inactive but listed");
+}
+
+std::size_t SrMesh::memory_bytes() const noexcept {
+  auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  return sizeof(SrMesh) + bytes(faces_) + bytes(nodes_) + bytes(base_slots_) + bytes(base_corners_) + bytes(state_) +
+         bytes(keys_) + bytes(vu_of_vt_) + bytes(active_list_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
 }
 
 }  // namespace varmesh

@@ -20,8 +20,9 @@
 ///
 /// Faces are original faces (see vertex_hierarchy.hpp): face f is active when its three corners have three
 /// distinct active ancestors, and then its corners are those ancestors. The mesh is stored as face slots
-/// (one per original face: three corners and the three faces across its edges) and one incident face per
-/// active vertex, so every operation walks only 1-rings.
+/// (one per original face, 24 bytes: three corners and the three twin half-edges across its edges, a
+/// half-edge being 4 * face + corner) and one incident corner per active vertex, so every operation walks
+/// only 1-rings and a ring step is one load.
 ///
 /// Query API note: update() may keep a few sibling pairs finer than extract() would, because a Kim-Lee ecol
 /// postponed by the degenerate case (section 4.4) is not retried until its neighbourhood changes; the answer
@@ -35,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "multitri/bounds.hpp"
@@ -69,10 +71,13 @@ class SrMesh {
   bool is_active(Index v) const noexcept { return state_[v] == 1; }
   std::size_t num_active_vertices() const noexcept { return num_active_; }
   std::size_t num_faces() const noexcept { return num_faces_; }
-  bool face_active(Index f) const noexcept { return corners_[3 * f] != kInvalid; }
-  std::array<Index, 3> face(Index f) const noexcept { return {corners_[3 * f], corners_[3 * f + 1], corners_[3 * f + 2]}; }
+  bool face_active(Index f) const noexcept { return faces_[f].v[0] != kInvalid; }
+  std::array<Index, 3> face(Index f) const noexcept { return faces_[f].v; }
   /// The face across edge k (corners k, k+1) of active face f; kInvalid on the border.
-  Index neighbor(Index f, int k) const noexcept { return adj_[3 * f + static_cast<std::size_t>(k)]; }
+  Index neighbor(Index f, int k) const noexcept {
+    const Index t = faces_[f].twin[static_cast<std::size_t>(k)];
+    return t == kInvalid ? kInvalid : t >> 2;
+  }
 
   /// Splits active non-leaf vertex vs under the scheme's rule (forcing what it needs). Returns true when vs
   /// is split afterwards. Throws InvalidInput if vs is out of range, inactive or a leaf.
@@ -92,10 +97,12 @@ class SrMesh {
   std::vector<Index> active_vertices() const;
   template <class Fn> void for_each_face(Fn&& fn) const {
     for (Index f = 0; f < num_slots_; ++f)
-      if (corners_[3 * f] != kInvalid) fn(f, corners_[3 * f], corners_[3 * f + 1], corners_[3 * f + 2]);
+      if (faces_[f].v[0] != kInvalid) fn(f, faces_[f].v[0], faces_[f].v[1], faces_[f].v[2]);
   }
   /// The current mesh with compact vertex numbering; vertex_nodes (optional) receives node id per vertex.
   TriMesh to_mesh(std::vector<Index>* vertex_nodes = nullptr) const;
+  /// Bytes held by this object's arrays (the hierarchy it refers to not included).
+  std::size_t memory_bytes() const noexcept;
 
   const SrStats& stats() const noexcept { return stats_; }
   void reset_stats() noexcept { stats_ = {}; }
@@ -115,23 +122,35 @@ class SrMesh {
   }
   void coarsen_one(Index e) { ecol(e); }
   // Candidates come from the list of active nodes, so a frame costs O(active vertices), not O(nodes).
+  // The candidates' bounds (and a child's record) are read soon after by the query and by vsplit, in an
+  // order unrelated to their addresses: asking for them while listing overlaps those cache misses.
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
     const auto leaves = static_cast<Index>(h_->num_leaves());
     for (Index v : active_list_)
-      if (v >= leaves) fn(v);
+      if (v >= leaves) {
+        prefetch_line(&h_->bound(v));
+        fn(v);
+      }
   }
   template <class Fn> void for_each_child_candidate(Index e, Fn&& fn) const {
     const CollapseRecord& r = h_->record(e);
-    if (!h_->is_leaf(r.vt)) fn(r.vt);
-    if (!h_->is_leaf(r.vu)) fn(r.vu);
+    for (Index c : {r.vt, r.vu})
+      if (!h_->is_leaf(c)) {
+        prefetch_line(&h_->bound(c));
+        prefetch_line(&h_->record(c));
+        fn(c);
+      }
   }
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
-    // A refined node whose two children are active, found from its child vt.
+    // A refined node whose two children are active, found from its child vt (vu_of_vt_ spares the
+    // collapse record's cache line for the many vertices that do not qualify).
     for (Index v : active_list_) {
-      const Index p = h_->parent(v);
-      if (p == kInvalid) continue;
-      const CollapseRecord& r = h_->record(p);
-      if (r.vt == v && state_[r.vu] == 1) fn(p);
+      const Index u = vu_of_vt_[v];
+      if (u != kInvalid && state_[u] == 1) {
+        const Index p = h_->parent(v);
+        prefetch_line(&h_->bound(p));
+        fn(p);
+      }
     }
   }
   template <class Fn> void for_each_parent_candidate(Index e, Fn&& fn) const {
@@ -140,53 +159,94 @@ class SrMesh {
   }
 
  private:
-  struct RingFace {
-    Index face;
-    int corner;  // corner of the centre vertex in `face`
+  static void prefetch_line(const void* p) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+    __builtin_prefetch(p);
+#else
+    (void)p;
+#endif
+  }
+  // Half-edge h = 4 * face + corner: the edge from that corner to the next one, and the corner itself.
+  struct FaceSlot {
+    std::array<Index, 3> v;     // corners (active nodes); v[0] == kInvalid when the face is inactive
+    std::array<Index, 3> twin;  // twin[k]: the half-edge across edge k, kInvalid on the border
   };
-  // One fan around v, counter-clockwise; `closed` when it wraps around.
-  bool gather_ring(Index v, std::vector<RingFace>& ring) const;
-  Index neighbor_a(const RingFace& rf) const noexcept { return corners_[3 * rf.face + (rf.corner + 1) % 3]; }
-  Index neighbor_b(const RingFace& rf) const noexcept { return corners_[3 * rf.face + (rf.corner + 2) % 3]; }
+  struct NodeSlot {
+    Index corner = kInvalid;      // a half-edge starting at this active vertex
+    Index active_pos = kInvalid;  // place in active_list_, kInvalid when not active
+  };
+  // One fan around a vertex as half-edges leaving it, counter-clockwise in buf[lo, hi); `closed` when it
+  // wraps around. Filled from both ends at once so that the two walks' cache misses overlap.
+  struct Ring {
+    std::vector<Index> buf;
+    std::size_t lo = 0, hi = 0;
+    bool closed = false;
+    Index fwd = kInvalid, back = kInvalid;  // the two walks' last half-edges (see ring_step)
+    bool fwd_open = false, back_open = false, prefetch_keys = false;
+    std::size_t size() const noexcept { return hi - lo; }
+    Index operator[](std::size_t i) const noexcept { return buf[lo + i]; }
+  };
+  static constexpr Index he(Index f, int k) noexcept { return 4 * f + static_cast<Index>(k); }
+  static constexpr Index next_corner(Index k) noexcept { return k == 2 ? 0 : k + 1; }
+  static constexpr Index prev_corner(Index k) noexcept { return k == 0 ? 2 : k - 1; }
+  Index corner_node(Index h) const noexcept { return faces_[h >> 2].v[h & 3]; }
+  Index head(Index h) const noexcept { return faces_[h >> 2].v[next_corner(h & 3)]; }   // neighbour a
+  Index third(Index h) const noexcept { return faces_[h >> 2].v[prev_corner(h & 3)]; }  // neighbour b
+  // prefetch_keys: the caller will test the neighbours' section 4.3 keys.
+  void gather_ring(Index start, Ring& ring, bool prefetch_keys = false) const;
+  void gather_rings(Index start_a, Ring& a, Index start_b, Ring& b) const;  // two rings, walked together
+  void ring_begin(Index start, Ring& ring, bool prefetch_keys) const;
+  bool ring_step(Ring& ring) const;  // one step each way; true when the ring is complete
+  // The i-th neighbour of the ring's centre: heads of its half-edges, then (open fan) the last face's third.
+  Index ring_neighbor(const Ring& ring, std::size_t i) const noexcept {
+    return i < ring.size() ? head(ring[i]) : third(ring[ring.size() - 1]);
+  }
 
-  void do_vsplit(Index vs, Index vl, Index vr, bool closed);  // the physical operation on ring_, cut vertices given
+  void do_vsplit(Index vs, Index vl, Index vr, int pl, int pr);  // on ring_, cut vertices and their places given
   void do_ecol(Index vs);  // uses ring_/ring2_ left by extra_common_neighbors(vs)
-  Index find_cut_vertex(Index leaf, std::span<const RingFace> ring, bool closed) const;
+  Index active_ancestor(Index leaf) const noexcept;
   bool vsplit_kim_lee(Index vs);
   bool vsplit_hoppe(Index vs);
   bool vsplit_xv(Index vs, int depth);
   bool ecol_xv(Index vs, int depth);
   bool make_active_xv(Index n, int depth);
   bool extra_common_neighbors(Index vs) const;
+  bool extra_common_neighbors_walk(Index vs) const;
   bool hoppe_ecol_legal(Index vs) const;
   bool xv_ring_matches(Index vs) const;
   void refine_forced(Index e);
   void report(Index v) { if (sink_) sink_(sink_ctx_, v); }
   void check_node(Index v, const char* what) const;
+  void build_base();
 
   const VertexHierarchy* h_;
   RefinementScheme scheme_;
   Index num_slots_ = 0;
-  std::vector<Index> corners_;  // 3 per original face; kInvalid when inactive
-  std::vector<Index> adj_;      // 3 per original face
-  std::vector<Index> vface_;    // per node: an incident active face
+  std::vector<FaceSlot> faces_;  // one per original face
+  std::vector<NodeSlot> nodes_;  // one per node
+  std::vector<std::pair<Index, FaceSlot>> base_slots_;  // the base mesh's faces, for reset()
+  std::vector<Index> base_corners_;                     // a half-edge of each root, as h_->roots()
   std::vector<std::uint8_t> state_;
+  std::vector<std::uint64_t> keys_;  // VertexHierarchy::key per node, copied so that it can be prefetched
+  std::vector<Index> vu_of_vt_;     // per node: its sibling vu when it is its parent's vt, else kInvalid
   std::vector<Index> active_list_;  // the active nodes, in no particular order
-  std::vector<Index> active_pos_;   // per node: its place in active_list_, kInvalid when not active
   std::size_t num_active_ = 0, num_faces_ = 0;
   void activate(Index v) {
-    active_pos_[v] = static_cast<Index>(active_list_.size());
+    nodes_[v].active_pos = static_cast<Index>(active_list_.size());
     active_list_.push_back(v);
   }
   void deactivate(Index v) {
-    const Index at = active_pos_[v], last = active_list_.back();
+    const Index at = nodes_[v].active_pos, last = active_list_.back();
     active_list_[at] = last;
-    active_pos_[last] = at;
+    nodes_[last].active_pos = at;
     active_list_.pop_back();
-    active_pos_[v] = kInvalid;
+    nodes_[v].active_pos = kInvalid;
   }
   SrStats stats_;
-  mutable std::vector<RingFace> ring_, ring2_;
+  mutable Ring ring_, ring2_;
+  mutable Index ecn_for_ = kInvalid;  // extra_common_neighbors(ecn_for_) is ecn_result_, rings in ring_/ring2_
+  mutable bool ecn_result_ = false;
+  mutable std::vector<Index> nbrs_;  // scratch: the neighbours of vt in extra_common_neighbors
   mutable std::vector<std::uint32_t> mark_;
   mutable std::uint32_t stamp_ = 0;
   std::vector<std::uint8_t> in_progress_;  // Xia-Varshney cycle guard
