@@ -470,6 +470,115 @@ double Grid48::max_vertical_error(const TriMesh& mesh) const {
   return worst;
 }
 
+namespace {
+
+// A vertex of a clipped polygon, in lattice coordinates, with its lattice id when it is a lattice point.
+struct CV {
+  double x, y, z;
+  Index lattice;
+};
+
+CV intersect(const CV& a, const CV& b, bool on_x, double line) {
+  // Computed from the endpoints in a canonical order so both triangles sharing the edge get the same bits.
+  const bool swap = (a.x > b.x) || (a.x == b.x && a.y > b.y);
+  const CV& p = swap ? b : a;
+  const CV& q = swap ? a : b;
+  const double t = on_x ? (line - p.x) / (q.x - p.x) : (line - p.y) / (q.y - p.y);
+  CV r{p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z), kInvalid};
+  if (on_x) r.x = line; else r.y = line;
+  return r;
+}
+
+void clip(std::vector<CV>& poly, std::vector<CV>& tmp, bool on_x, double line) {
+  tmp.clear();
+  const std::size_t n = poly.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const CV& a = poly[i];
+    const CV& b = poly[(i + 1) % n];
+    const double va = on_x ? a.x : a.y, vb = on_x ? b.x : b.y;
+    const bool ia = va <= line, ib = vb <= line;
+    if (ia) tmp.push_back(a);
+    if (ia != ib && va != line && vb != line) tmp.push_back(intersect(a, b, on_x, line));
+  }
+  poly.swap(tmp);
+}
+
+// Clips triangles (lattice points, counter-clockwise) to the grid rectangle [0, xmax] x [0, ymax] (lattice
+// units) and appends the pieces to a mesh as fans. lattice_vertex(p) gives the vertex of a lattice point
+// inside the rectangle; points created on the clipping lines are shared through a hash map.
+class GridClipper {
+ public:
+  GridClipper(const Grid48& g, TriMesh& out, std::vector<Index>& ids)
+      : g_(g), out_(out), ids_(ids), xmax_(double(g.grid_width() - 1)), ymax_(double(g.grid_height() - 1)) {}
+
+  template <class LatticeVertex>
+  void add(Index a, Index b, Index c, LatticeVertex&& lattice_vertex) {
+    const CV va = cv(a), vb = cv(b), vc = cv(c);
+    if (std::max({va.x, vb.x, vc.x}) <= xmax_ && std::max({va.y, vb.y, vc.y}) <= ymax_) {
+      out_.indices.push_back(lattice_vertex(a));
+      out_.indices.push_back(lattice_vertex(b));
+      out_.indices.push_back(lattice_vertex(c));
+      return;
+    }
+    if (std::min({va.x, vb.x, vc.x}) >= xmax_ || std::min({va.y, vb.y, vc.y}) >= ymax_) return;
+    poly_.assign({va, vb, vc});
+    clip(poly_, tmp_, true, xmax_);
+    if (poly_.size() >= 3) clip(poly_, tmp_, false, ymax_);
+    if (poly_.size() < 3) return;
+    Index vid[8];
+    for (std::size_t k = 0; k < poly_.size(); ++k)
+      vid[k] = poly_[k].lattice != kInvalid ? lattice_vertex(poly_[k].lattice) : clip_vertex(poly_[k]);
+    // Fan from a vertex that makes no zero-area triangle (clipped polygons can have three collinear
+    // vertices on a clipping line; fanning from the middle one keeps every vertex, so no T-junction).
+    const std::size_t n = poly_.size();
+    auto area = [&](std::size_t i, std::size_t j, std::size_t k) {
+      return (poly_[j].x - poly_[i].x) * (poly_[k].y - poly_[i].y) - (poly_[k].x - poly_[i].x) * (poly_[j].y - poly_[i].y);
+    };
+    std::size_t apex = 0;
+    for (std::size_t s0 = 0; s0 < n; ++s0) {
+      bool ok = true;
+      for (std::size_t k = 1; k + 1 < n && ok; ++k) ok = area(s0, (s0 + k) % n, (s0 + k + 1) % n) > 0.0;
+      if (ok) {
+        apex = s0;
+        break;
+      }
+    }
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+      const std::size_t j = (apex + k) % n, l = (apex + k + 1) % n;
+      if (area(apex, j, l) <= 0.0) continue;
+      out_.indices.push_back(vid[apex]);
+      out_.indices.push_back(vid[j]);
+      out_.indices.push_back(vid[l]);
+    }
+  }
+
+ private:
+  CV cv(Index p) const {
+    return CV{double(g_.px(p)), double(g_.py(p)), double(g_.height_at(p)), p};
+  }
+  Index clip_vertex(const CV& v) {
+    float fx = static_cast<float>(v.x), fy = static_cast<float>(v.y);
+    std::uint32_t bx, by;
+    std::memcpy(&bx, &fx, 4);
+    std::memcpy(&by, &fy, 4);
+    auto [it, inserted] = clip_vertices_.try_emplace((std::uint64_t(bx) << 32) | by, static_cast<Index>(out_.positions.size()));
+    if (inserted) {
+      out_.positions.push_back({fx * g_.spacing_x(), fy * g_.spacing_y(), static_cast<float>(v.z)});
+      ids_.push_back(kInvalid);
+    }
+    return it->second;
+  }
+
+  const Grid48& g_;
+  TriMesh& out_;
+  std::vector<Index>& ids_;
+  double xmax_, ymax_;
+  std::unordered_map<std::uint64_t, Index> clip_vertices_;
+  std::vector<CV> poly_, tmp_;
+};
+
+}  // namespace
+
 Grid48Front::Grid48Front(const Grid48& grid) : grid_(&grid) { reset(); }
 
 template <class Wants>
@@ -486,51 +595,242 @@ void Grid48Front::descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, 
   descend(mx, my, cx, cy, ax, ay, wants);
 }
 
-QueryStats Grid48Front::extract_fast(const Query& q) {
-  if (q.triangle_budget != 0 || q.time_budget_ms > 0.0) return extract(*this, q);
-  QueryStats stats;
+void Grid48Front::clear_refined() {
   // Output-sensitive reset: after an extract_fast with no move since, only the diamonds it evaluated can
   // be non-zero.
   if (touched_valid_) {
-    for (Index p : touched_) refined_[p] = 0;
+    for (std::size_t i = 0; i < num_touched_; ++i) refined_[touched_[i]] = 0;
   } else {
     std::fill(refined_.begin(), refined_.end(), std::uint8_t{0});
   }
-  touched_.clear();
+  num_touched_ = 0;
   touched_valid_ = false;
+}
+
+// The object-error query over the whole grid. Node errors are saturated (a diamond's error is at least
+// each child's), so a triangle is split iff its diamond's error exceeds the threshold, whichever of the
+// diamond's two triangles gets there first: no memo of rejected diamonds is needed and the result is the
+// least fixpoint of extract(). The descent is iterative (depth first, one pending sibling per level).
+// Lattice indices are linear in (x, y), so a hypotenuse midpoint is (b + c) / 2, and it is a lattice point
+// exactly while the split depth is below 2 log2 S: no coordinates travel with the triangles.
+// With kEmit the mesh is written on the way: its vertices are the tile corners and the centres of split
+// diamonds, so a vertex is made when its diamond is first split and its id travels down with the
+// triangles; a leaf triangle then costs three stores. With kClip (lattice larger than the grid) each
+// triangle carries its side of the grid rectangle (0 inside, 1 across its border, 2 outside; only
+// triangles across the border are re-classified), vertices are made only for points inside it, and the
+// triangles across the border are clipped at the end.
+template <bool kClip, bool kEmit>
+QueryStats Grid48Front::descend_object(float threshold, TriMesh* out, std::vector<Index>* ids) {
+  const Grid48& g = *grid_;
+  const std::uint32_t lw = static_cast<std::uint32_t>(g.lattice_width());
+  const std::uint32_t xmax = static_cast<std::uint32_t>(g.grid_width() - 1), ymax = static_cast<std::uint32_t>(g.grid_height() - 1);
+  const std::uint32_t max_depth = static_cast<std::uint32_t>(2 * g.log2_tile());
+  const float* err = g.errors();
+  const float* z = g.heights();
+  const float sx = g.spacing_x(), sy = g.spacing_y();
+  std::uint8_t* refined = refined_.data();
+  if (kEmit && vertex_id_.size() != g.num_points()) vertex_id_.assign(g.num_points(), kInvalid);
+  Index* vid = vertex_id_.data();
+  // Output arrays sized from the last output (plus a margin), written through raw pointers, grown when full
+  // (rare) and trimmed at the end: one zero fill instead of a capacity check per push_back.
+  // (The hot write pointer tp is never captured by a lambda, so that it can stay in a register.)
+  std::vector<glm::vec3> pos;
+  std::vector<Index> lid, tri;
+  std::size_t nv = 0;
+  Index* tp = nullptr;  // next triangle slot
+  Index* tp_end = nullptr;
+  if (kEmit) {
+    pos.resize(last_vertices_ + last_vertices_ / 8 + 256);
+    lid.resize(pos.size());
+    tri.resize(3 * (last_faces_ + last_faces_ / 8 + 256));
+    tp = tri.data();
+    tp_end = tp + tri.size();
+  }
+  auto inside = [&](Index p) {
+    const std::uint32_t y = g.py(p);
+    return y <= ymax && p - y * lw <= xmax;
+  };
+  auto make_vertex = [&](Index p) {
+    if (nv == pos.size()) {
+      pos.resize(2 * nv);
+      lid.resize(2 * nv);
+    }
+    const std::uint32_t y = g.py(p), x = p - y * lw;
+    pos[nv] = {float(x) * sx, float(y) * sy, z[p]};
+    lid[nv] = p;
+    vid[p] = static_cast<Index>(nv);
+    return static_cast<Index>(nv++);
+  };
+  auto side_of = [&](Index a, Index b, Index c) -> std::uint32_t {
+    const std::uint32_t ay = g.py(a), by = g.py(b), cy = g.py(c);
+    const std::uint32_t ax = a - ay * lw, bx = b - by * lw, cx = c - cy * lw;
+    if (std::max({ax, bx, cx}) <= xmax && std::max({ay, by, cy}) <= ymax) return 0;
+    if (std::min({ax, bx, cx}) >= xmax || std::min({ay, by, cy}) >= ymax) return 2;
+    return 1;
+  };
+  if (kEmit) {
+    const std::size_t s = g.tile_size();
+    for (std::size_t ty = 0; ty <= g.tiles_y(); ++ty)
+      for (std::size_t tx = 0; tx <= g.tiles_x(); ++tx) {
+        const Index p = static_cast<Index>(ty * s * lw + tx * s);
+        if (!kClip || inside(p)) make_vertex(p);
+      }
+  }
+  std::vector<Index> across;  // kClip: leaf triangles across the rectangle's border
+  std::vector<std::array<Index, 3>> roots;
+  roots.reserve(2 * g.tiles_x() * g.tiles_y());
+  for_each_root([&](Index a, Index b, Index c) { roots.push_back({a, b, c}); });
+  // The current triangle lives in scalars (registers); the stack holds pending second children.
+  struct Item {
+    Index a, b, c, va, vb, vc;
+    std::uint32_t depth_side;  // depth | side << 8
+  };
+  Item stack[72];
+  Index* const touched_begin = touched_.data();
+  Index* touched = touched_begin;
+  std::size_t faces = 0, finest = 0;
+  for (const auto& r : roots) {
+    Index a = r[0], b = r[1], c = r[2];
+    Index va = kEmit ? vid[a] : 0, vb = kEmit ? vid[b] : 0, vc = kEmit ? vid[c] : 0;
+    std::uint32_t depth = 0, side = kClip ? side_of(a, b, c) : 0;
+    int top = 0;
+    for (;;) {
+      if (depth < max_depth) {
+        const Index m = (b + c) >> 1;
+        if (err[m] > threshold) {
+          Index vm = 0;
+          if (!refined[m]) {
+            refined[m] = 1;
+            *touched++ = m;
+            if (kEmit && (!kClip || side == 0 || inside(m))) vm = make_vertex(m);
+          } else if (kEmit) {
+            vm = vid[m];  // garbage for points outside the rectangle: used only by triangles outside it
+          }
+          // Children (m; a, b) and (m; c, a), counter-clockwise; the second waits on the stack.
+          Item& w = stack[top++];
+          w.a = m;
+          w.b = c;
+          w.c = a;
+          w.va = vm;
+          w.vb = vc;
+          w.vc = va;
+          w.depth_side = (depth + 1) | side << 8;
+          c = b;
+          b = a;
+          a = m;
+          vc = vb;
+          vb = va;
+          va = vm;
+          ++depth;
+          if (kClip && side == 1) {
+            side = side_of(a, b, c);
+            Item& u = stack[top - 1];
+            u.depth_side = depth | side_of(u.a, u.b, u.c) << 8;
+          }
+          continue;
+        }
+      }
+      ++faces;
+      finest += depth == max_depth;
+      if (kEmit) {
+        if (!kClip || side == 0) {
+          if (tp_end - tp < 3) {
+            const std::size_t used = static_cast<std::size_t>(tp - tri.data());
+            tri.resize(2 * tri.size());
+            tp = tri.data() + used;
+            tp_end = tri.data() + tri.size();
+          }
+          tp[0] = va;
+          tp[1] = vb;
+          tp[2] = vc;
+          tp += 3;
+        } else if (side == 1) {
+          across.insert(across.end(), {a, b, c});
+        }
+      }
+      if (top == 0) break;
+      const Item& u = stack[--top];
+      a = u.a;
+      b = u.b;
+      c = u.c;
+      va = u.va;
+      vb = u.vb;
+      vc = u.vc;
+      depth = u.depth_side & 255u;
+      side = u.depth_side >> 8;
+    }
+  }
+  const std::size_t split = static_cast<std::size_t>(touched - touched_begin);
+  num_touched_ = split;
+  if (kEmit) {
+    pos.resize(nv);
+    lid.resize(nv);
+    tri.resize(static_cast<std::size_t>(tp - tri.data()));
+    out->positions = std::move(pos);
+    out->indices = std::move(tri);
+    *ids = std::move(lid);
+    if (kClip) {
+      GridClipper clipper(g, *out, *ids);
+      for (std::size_t k = 0; k < across.size(); k += 3)
+        clipper.add(across[k], across[k + 1], across[k + 2], [&](Index p) { return vid[p]; });
+    }
+    last_vertices_ = ids->size();
+    last_faces_ = out->indices.size() / 3;
+  }
+  touched_valid_ = true;
+  num_refined_ = split;
+  num_faces_ = faces;
+  sets_valid_ = false;
+  view_valid_ = false;
+  QueryStats stats;
+  stats.refined = split;
+  // Every triangle visited was evaluated except the finest leaves: visits = 2 faces - roots.
+  stats.evaluated = 2 * faces - roots.size() - finest;
+  return stats;
+}
+
+TriMesh Grid48Front::extract_mesh(const Query& q, std::vector<Index>* lattice_ids) {
+  const bool object = q.criterion.kind() == Criterion::Kind::kObjectError && q.focus.everywhere() &&
+                      q.triangle_budget == 0 && q.time_budget_ms <= 0.0;
+  if (!object) {
+    extract_fast(q);
+    return to_mesh(lattice_ids);
+  }
+  clear_refined();
+  TriMesh out;
+  std::vector<Index> ids;
+  if (grid_->needs_clip())
+    descend_object<true, true>(q.criterion.threshold(), &out, &ids);
+  else
+    descend_object<false, true>(q.criterion.threshold(), &out, &ids);
+  if (lattice_ids) *lattice_ids = std::move(ids);
+  return out;
+}
+
+QueryStats Grid48Front::extract_fast(const Query& q) {
+  if (q.triangle_budget != 0 || q.time_budget_ms > 0.0) return extract(*this, q);
+  clear_refined();
+  if (q.criterion.kind() == Criterion::Kind::kObjectError && q.focus.everywhere())
+    return descend_object<false, false>(q.criterion.threshold(), nullptr, nullptr);
+  QueryStats stats;
   const Grid48& g = *grid_;
   const std::uint32_t lw = static_cast<std::uint32_t>(g.lattice_width());
   std::size_t refined = 0, evaluated = 0;
-  auto run = [&](auto& wants) {
-    for_each_root([&](Index a, Index b, Index c) { descend(a % lw, a / lw, b % lw, b / lw, c % lw, c / lw, wants); });
+  const float sx = g.spacing_x(), sy = g.spacing_y();
+  auto wants = [&](Index m, std::uint32_t mx, std::uint32_t my) {
+    ++evaluated;
+    touched_[num_touched_++] = m;
+    const ElementBound b{{float(mx) * sx, float(my) * sy, g.height_at(m)}, g.radius(m), g.error(m), {}};
+    const bool w = q.wants(b);
+    refined += w;
+    return w;
   };
-  if (q.criterion.kind() == Criterion::Kind::kObjectError && q.focus.everywhere()) {
-    // The common case gets a comparison instead of a bound: error > threshold.
-    const float e = q.criterion.threshold();
-    auto wants = [&](Index m, std::uint32_t, std::uint32_t) {
-      ++evaluated;
-      touched_.push_back(m);
-      const bool w = g.error(m) > e;
-      refined += w;
-      return w;
-    };
-    run(wants);
-  } else {
-    const float sx = g.spacing_x(), sy = g.spacing_y();
-    auto wants = [&](Index m, std::uint32_t mx, std::uint32_t my) {
-      ++evaluated;
-      touched_.push_back(m);
-      const ElementBound b{{float(mx) * sx, float(my) * sy, g.height_at(m)}, g.radius(m), g.error(m), {}};
-      const bool w = q.wants(b);
-      refined += w;
-      return w;
-    };
-    run(wants);
-  }
+  for_each_root([&](Index a, Index b, Index c) { descend(a % lw, a / lw, b % lw, b / lw, c % lw, c / lw, wants); });
   std::size_t faces = 2 * g.tiles_x() * g.tiles_y();
   bool ideal = true;
   const bool check = !q.criterion.is_monotone();
-  for (Index p : touched_) {
+  for (std::size_t i = 0; i < num_touched_; ++i) {
+    const Index p = touched_[i];
     if (refined_[p] == 2) {
       refined_[p] = 0;
     } else {
@@ -562,10 +862,9 @@ Query ViewQuery::to_query() const {
 // change. Frustum: each plane's signed distance at the centre moves by at most |d eye| + angle * |c - eye|
 // (the planes turn with the camera); screen error: distance minus radius moves by at most |d eye|. Returns
 // "wanted" exactly as Query::wants would (same formulas as Criterion::is_fine).
-bool Grid48Front::evaluate_view(Index p, const ViewQuery& v, const Frustum& fr, float scale, Slack& s) {
-  const Grid48& g = *grid_;
-  const glm::vec3 c = g.position(p);
-  const float r = g.radius(p), e = g.error(p);
+bool Grid48Front::evaluate_view(const Geo& d, const ViewQuery& v, const Frustum& fr, float scale, Slack& s) {
+  const glm::vec3 c = d.centre;
+  const float r = d.radius, e = d.error;
   s.t0 = moved_;
   s.r0 = turned_;
   const float dist = glm::length(c - v.camera.eye);
@@ -623,54 +922,72 @@ QueryStats Grid48Front::update_view(const ViewQuery& v) {
     return s.slack < 0.0f || t + th * (s.rho + t) >= s.slack;
   };
   QueryStats stats;
-  // Coarsen: maximal diamonds whose record may be out of date are evaluated; the others stay wanted.
-  std::vector<Index> work;
-  for (std::size_t i = 0; i < maximal_.items.size(); ++i)
-    if (stale(maximal_.slack[i])) work.push_back(maximal_.items[i]);
-  while (!work.empty()) {
-    const Index p = work.back();
-    work.pop_back();
-    const Index i = maximal_.pos[p];
-    if (i == kInvalid || !stale(maximal_.slack[i])) continue;
+  // Coarsen. Stale maximal diamonds are evaluated in place (a sequential scan); those no longer wanted are
+  // coarsened afterwards. A diamond whose record is still fresh keeps its status, so after the scan only
+  // diamonds that become maximal during this frame (parents of coarsened ones) need an evaluation.
+  std::vector<std::pair<Index, Slack>> unwanted;
+  std::vector<Index> work, fresh;
+  new_maximal_ = &fresh;
+  for (std::size_t i = 0; i < maximal_.items.size(); ++i) {
+    Slack& s = maximal_.slack[i];
+    if (!stale(s)) continue;
     ++stats.evaluated;
-    if (evaluate_view(p, v, fr, scale, maximal_.slack[i])) continue;
-    Slack record = maximal_.slack[i];  // "not wanted", valid as an exposed diamond too
+    if (!evaluate_view(maximal_.geo[i], v, fr, scale, s)) unwanted.emplace_back(maximal_.items[i], s);
+  }
+  // The record of a diamond found not wanted stays valid once it is exposed.
+  auto coarsen = [&](Index p, const Slack& record) {
     coarsen_one(p);
     ++stats.coarsened;
     exposed_.slack[exposed_.pos[p]] = record;
-    grid_->for_each_parent(p, [&](Index q) { work.push_back(q); });
+  };
+  for (const auto& [p, record] : unwanted) coarsen(p, record);  // never changes another's status
+  while (!fresh.empty()) {
+    const Index p = fresh.back();
+    fresh.pop_back();
+    const Index i = maximal_.pos[p];
+    if (i == kInvalid || !stale(maximal_.slack[i])) continue;
+    ++stats.evaluated;
+    if (evaluate_view(maximal_.geo[i], v, fr, scale, maximal_.slack[i])) continue;
+    const Slack record = maximal_.slack[i];  // copied: coarsening moves the set's entries
+    coarsen(p, record);
   }
-  // Refine: exposed diamonds whose record may be out of date, and everything newly exposed.
-  std::vector<Index> stack;
-  for (std::size_t i = 0; i < exposed_.items.size(); ++i)
-    if (stale(exposed_.slack[i])) stack.push_back(exposed_.items[i]);
-  while (!stack.empty()) {
-    const Index p = stack.back();
-    stack.pop_back();
+  new_maximal_ = nullptr;
+  // Refine. Stale exposed diamonds are evaluated in place; the wanted ones are refined afterwards (with
+  // their missing ancestors), and the diamonds they newly expose are evaluated in turn.
+  work.clear();
+  for (std::size_t i = 0; i < exposed_.items.size(); ++i) {
+    Slack& s = exposed_.slack[i];
+    if (!stale(s)) continue;
+    ++stats.evaluated;
+    if (evaluate_view(exposed_.geo[i], v, fr, scale, s)) work.push_back(exposed_.items[i]);
+  }
+  new_exposed_ = &fresh;
+  auto refine_wanted = [&](Index p) { refine(p, [&](Index) { ++stats.refined; }); };
+  for (Index p : work) refine_wanted(p);
+  while (!fresh.empty()) {
+    const Index p = fresh.back();
+    fresh.pop_back();
     const Index i = exposed_.pos[p];
     if (i == kInvalid || !stale(exposed_.slack[i])) continue;
     ++stats.evaluated;
-    if (!evaluate_view(p, v, fr, scale, exposed_.slack[i])) continue;
-    refine(p, [&](Index t) {
-      ++stats.refined;
-      grid_->for_each_child(t, [&](Index c) {
-        if (!refined_[c]) stack.push_back(c);
-      });
-    });
+    if (evaluate_view(exposed_.geo[i], v, fr, scale, exposed_.slack[i])) refine_wanted(p);
   }
+  new_exposed_ = nullptr;
   // Maximal diamonds without a record (refined now, or parents of coarsened ones) are wanted; evaluate them
   // now so that the next frame can skip them.
   for (std::size_t i = 0; i < maximal_.items.size(); ++i)
-    if (maximal_.slack[i].slack < 0.0f) evaluate_view(maximal_.items[i], v, fr, scale, maximal_.slack[i]);
+    if (maximal_.slack[i].slack < 0.0f) evaluate_view(maximal_.geo[i], v, fr, scale, maximal_.slack[i]);
   return stats;
 }
 
 void Grid48Front::reset() {
   refined_.assign(grid_->num_points(), 0);
+  touched_.resize(grid_->num_points());
+  num_touched_ = 0;
   num_refined_ = 0;
   num_faces_ = 2 * grid_->tiles_x() * grid_->tiles_y();
-  exposed_.reset(grid_->num_points());
-  maximal_.reset(grid_->num_points());
+  exposed_.reset(*grid_);
+  maximal_.reset(*grid_);
   view_valid_ = false;
   const std::size_t s = grid_->tile_size(), w = grid_->lattice_width();
   for (std::size_t ty = 0; ty < grid_->tiles_y(); ++ty)
@@ -681,8 +998,8 @@ void Grid48Front::reset() {
 
 void Grid48Front::rebuild_sets() const {
   const Grid48& g = *grid_;
-  exposed_.reset(g.num_points());
-  maximal_.reset(g.num_points());
+  exposed_.reset(g);
+  maximal_.reset(g);
   for (Index p = 0; p < g.num_points(); ++p) {
     if (!g.is_node(p)) continue;
     if (refined_[p]) {
@@ -702,7 +1019,9 @@ void Grid48Front::on_refined(Index t) {
   exposed_.erase(t);
   maximal_.insert(t);
   grid_->for_each_parent(t, [&](Index q) { maximal_.erase(q); });
-  grid_->for_each_child(t, [&](Index c) { exposed_.insert(c); });
+  grid_->for_each_child(t, [&](Index c) {
+    if (exposed_.insert(c) && new_exposed_) new_exposed_->push_back(c);
+  });
 }
 
 void Grid48Front::on_coarsened(Index t) {
@@ -712,7 +1031,7 @@ void Grid48Front::on_coarsened(Index t) {
   g.for_each_parent(t, [&](Index q) {
     bool leaf = true;
     g.for_each_child(q, [&](Index c) { leaf = leaf && !refined_[c]; });
-    if (leaf) maximal_.insert(q);
+    if (leaf && maximal_.insert(q) && new_maximal_) new_maximal_->push_back(q);
   });
   g.for_each_child(t, [&](Index c) {
     bool exposed = false;
@@ -751,40 +1070,6 @@ void Grid48Front::validate() const {
   if (walked != num_faces_) throw InvalidInput("Grid48Front::validate: triangle walk disagrees with the face count");
 }
 
-namespace {
-
-// A vertex of a clipped polygon, in lattice coordinates, with its lattice id when it is a lattice point.
-struct CV {
-  double x, y, z;
-  Index lattice;
-};
-
-CV intersect(const CV& a, const CV& b, bool on_x, double line) {
-  // Computed from the endpoints in a canonical order so both triangles sharing the edge get the same bits.
-  const bool swap = (a.x > b.x) || (a.x == b.x && a.y > b.y);
-  const CV& p = swap ? b : a;
-  const CV& q = swap ? a : b;
-  const double t = on_x ? (line - p.x) / (q.x - p.x) : (line - p.y) / (q.y - p.y);
-  CV r{p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z), kInvalid};
-  if (on_x) r.x = line; else r.y = line;
-  return r;
-}
-
-void clip(std::vector<CV>& poly, std::vector<CV>& tmp, bool on_x, double line) {
-  tmp.clear();
-  const std::size_t n = poly.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const CV& a = poly[i];
-    const CV& b = poly[(i + 1) % n];
-    const double va = on_x ? a.x : a.y, vb = on_x ? b.x : b.y;
-    const bool ia = va <= line, ib = vb <= line;
-    if (ia) tmp.push_back(a);
-    if (ia != ib && va != line && vb != line) tmp.push_back(intersect(a, b, on_x, line));
-  }
-  poly.swap(tmp);
-}
-
-}  // namespace
 
 TriMesh Grid48Front::to_mesh(std::vector<Index>* lattice_ids) const {
   TriMesh out;
@@ -828,63 +1113,8 @@ TriMesh Grid48Front::to_mesh(std::vector<Index>* lattice_ids) const {
       dst += 3;
     });
   } else {
-    const double xmax = double(g.grid_width() - 1), ymax = double(g.grid_height() - 1);
-    std::unordered_map<std::uint64_t, Index> clip_vertices;
-    auto clip_vertex = [&](const CV& v) {
-      float fx = static_cast<float>(v.x), fy = static_cast<float>(v.y);
-      std::uint32_t bx, by;
-      std::memcpy(&bx, &fx, 4);
-      std::memcpy(&by, &fy, 4);
-      auto [it, inserted] = clip_vertices.try_emplace((std::uint64_t(bx) << 32) | by, static_cast<Index>(out.positions.size()));
-      if (inserted) {
-        out.positions.push_back({fx * g.spacing_x(), fy * g.spacing_y(), static_cast<float>(v.z)});
-        ids.push_back(kInvalid);
-      }
-      return it->second;
-    };
-    std::vector<CV> poly, tmp;
-    auto cv = [&](Index p) {
-      return CV{double(p % lw), double(p / lw), double(g.position(p).z), p};
-    };
-    for_each_triangle([&](Index a, Index b, Index c) {
-      const CV va = cv(a), vb = cv(b), vc = cv(c);
-      if (std::max({va.x, vb.x, vc.x}) <= xmax && std::max({va.y, vb.y, vc.y}) <= ymax) {
-        out.indices.push_back(lattice_vertex(a));
-        out.indices.push_back(lattice_vertex(b));
-        out.indices.push_back(lattice_vertex(c));
-        return;
-      }
-      if (std::min({va.x, vb.x, vc.x}) >= xmax || std::min({va.y, vb.y, vc.y}) >= ymax) return;
-      poly.assign({va, vb, vc});
-      clip(poly, tmp, true, xmax);
-      if (poly.size() >= 3) clip(poly, tmp, false, ymax);
-      if (poly.size() < 3) return;
-      Index vid[8];
-      for (std::size_t k = 0; k < poly.size(); ++k)
-        vid[k] = poly[k].lattice != kInvalid ? lattice_vertex(poly[k].lattice) : clip_vertex(poly[k]);
-      // Fan from a vertex that makes no zero-area triangle (clipped polygons can have three collinear
-      // vertices on a clipping line; fanning from the middle one keeps every vertex, so no T-junction).
-      const std::size_t n = poly.size();
-      auto area = [&](std::size_t i, std::size_t j, std::size_t k) {
-        return (poly[j].x - poly[i].x) * (poly[k].y - poly[i].y) - (poly[k].x - poly[i].x) * (poly[j].y - poly[i].y);
-      };
-      std::size_t apex = 0;
-      for (std::size_t s0 = 0; s0 < n; ++s0) {
-        bool ok = true;
-        for (std::size_t k = 1; k + 1 < n && ok; ++k) ok = area(s0, (s0 + k) % n, (s0 + k + 1) % n) > 0.0;
-        if (ok) {
-          apex = s0;
-          break;
-        }
-      }
-      for (std::size_t k = 1; k + 1 < n; ++k) {
-        const std::size_t j = (apex + k) % n, l = (apex + k + 1) % n;
-        if (area(apex, j, l) <= 0.0) continue;
-        out.indices.push_back(vid[apex]);
-        out.indices.push_back(vid[j]);
-        out.indices.push_back(vid[l]);
-      }
-    });
+    GridClipper clipper(g, out, ids);
+    for_each_triangle([&](Index a, Index b, Index c) { clipper.add(a, b, c, lattice_vertex); });
   }
   for (Index p : ids)
     if (p != kInvalid) remap[p] = kInvalid;

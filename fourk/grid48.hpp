@@ -19,7 +19,9 @@
 /// Hence every ready-made criterion is monotone, an extracted mesh whose triangles are all "fine" for
 /// object_error(e) is within e of every sample it covers, and update() equals extract().
 ///
-/// Memory: 12 bytes per lattice point (height, error, radius). A front adds 1 byte per lattice point.
+/// Memory: 12 bytes per lattice point (height, error, radius). A front adds up to 21 bytes per lattice point
+/// (refined flags, its boundary sets' positions, the touched list, the vertex maps of to_mesh and
+/// extract_mesh, each allocated on first use) plus its boundary sets (40 bytes per boundary diamond).
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -124,6 +126,8 @@ class Grid48 {
   // Internal layout helpers used by Grid48Front.
   int log2_tile() const noexcept { return log2_tile_; }
   bool needs_clip() const noexcept { return lw_ != width_ || lh_ != height_; }
+  const float* heights() const noexcept { return z_.data(); }
+  const float* errors() const noexcept { return error_.data(); }
 
  private:
   void compute_errors();
@@ -186,12 +190,17 @@ class Grid48Front {
   /// algorithm, so the result is always the same as extract(). Queries with budgets go to extract().
   QueryStats extract_fast(const Query& q);
 
+  /// extract_fast(q) then to_mesh(lattice_ids): the same front and the same triangles (vertex numbering may
+  /// differ). For object-error queries without focus or budget (the usual terrain query) both happen in one
+  /// descent that writes vertices and triangles as it goes; other queries take the two calls.
+  TriMesh extract_mesh(const Query& q, std::vector<Index>* lattice_ids = nullptr);
+
   /// Frame-to-frame update for a moving camera: the same state update(front, v.to_query()) reaches (which
   /// is extract()'s), but a boundary diamond is re-evaluated only when the camera has moved enough since
   /// its last evaluation to possibly change its status. Each evaluation stores a slack: how far the eye may
   /// translate (and the view rotate, scaled by the diamond's distance) before the frustum test or the
   /// screen-error test can flip. When the viewport, pixels, field of view, aspect, clipping distances or
-  /// object error change, it re-evaluates everything. Costs 16 bytes per boundary diamond of extra state.
+  /// object error change, it re-evaluates everything. Costs 36 bytes per boundary diamond of extra state.
   QueryStats update_view(const ViewQuery& v);
   /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
   template <class Fn> void for_each_triangle(Fn&& fn) const;
@@ -214,11 +223,18 @@ class Grid48Front {
   template <class Wants>
   void descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
                std::uint32_t cy, Wants& wants);
+  void clear_refined();
+  template <bool kClip, bool kEmit>
+  QueryStats descend_object(float threshold, TriMesh* out, std::vector<Index>* ids);
+  std::vector<Index> vertex_id_;  // extract_mesh scratch: valid only for points it made vertices
+  std::size_t last_vertices_ = 0, last_faces_ = 0;  // extract_mesh's last output size (first guess)
   const Grid48* grid_;
   // 0: not refined; 1: refined. During extract_fast, 2 marks "evaluated, not wanted".
   std::vector<std::uint8_t> refined_;
   mutable std::vector<Index> vertex_of_point_;  // to_mesh scratch, all kInvalid between calls
-  std::vector<Index> touched_;  // diamonds the last extract_fast evaluated (a superset of the refined ones)
+  // Diamonds the last extract_fast evaluated (a superset of the refined ones); room for every point.
+  std::vector<Index> touched_;
+  std::size_t num_touched_ = 0;
   bool touched_valid_ = false;  // true while nothing but extract_fast changed refined_
   std::size_t num_faces_ = 0;
   std::size_t num_refined_ = 0;
@@ -233,20 +249,32 @@ class Grid48Front {
   struct Slack {
     float slack = -1.0f, rho = 0.0f, t0 = 0.0f, r0 = 0.0f;
   };
+  // A copy of the diamond's bound, so that update_view evaluates a stale diamond from the set's own
+  // (sequentially scanned) arrays instead of three random reads of the hierarchy.
+  struct Geo {
+    glm::vec3 centre{};
+    float radius = 0.0f, error = 0.0f;
+  };
   struct IndexSet {
+    const Grid48* grid = nullptr;
     std::vector<Index> items;
     std::vector<Slack> slack;  // parallel to items: scanned sequentially by update_view
+    std::vector<Geo> geo;      // parallel to items: read for stale items only
     std::vector<Index> pos;
-    void reset(std::size_t n) {
+    void reset(const Grid48& g) {
+      grid = &g;
       items.clear();
       slack.clear();
-      pos.assign(n, kInvalid);
+      geo.clear();
+      pos.assign(g.num_points(), kInvalid);
     }
-    void insert(Index p) {
-      if (pos[p] != kInvalid) return;
+    bool insert(Index p) {
+      if (pos[p] != kInvalid) return false;
       pos[p] = static_cast<Index>(items.size());
       items.push_back(p);
       slack.push_back({});
+      geo.push_back({grid->position(p), grid->radius(p), grid->error(p)});
+      return true;
     }
     void erase(Index p) {
       const Index i = pos[p];
@@ -254,19 +282,24 @@ class Grid48Front {
       const Index last = items.back();
       items[i] = last;
       slack[i] = slack.back();
+      geo[i] = geo.back();
       pos[last] = i;
       items.pop_back();
       slack.pop_back();
+      geo.pop_back();
       pos[p] = kInvalid;
     }
   };
   mutable IndexSet exposed_, maximal_;
+  // During update_view: where on_refined / on_coarsened report diamonds newly added to the sets.
+  std::vector<Index>* new_exposed_ = nullptr;
+  std::vector<Index>* new_maximal_ = nullptr;
   mutable bool sets_valid_ = false;
 
   bool view_valid_ = false;
   ViewQuery last_view_{};
   float moved_ = 0.0f, turned_ = 0.0f;
-  bool evaluate_view(Index p, const ViewQuery& v, const Frustum& fr, float scale, Slack& s);
+  bool evaluate_view(const Geo& d, const ViewQuery& v, const Frustum& fr, float scale, Slack& s);
   void rebuild_sets() const;
   void on_refined(Index t);
   void on_coarsened(Index t);

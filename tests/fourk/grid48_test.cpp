@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <random>
 #include <set>
 #include <tuple>
@@ -112,6 +114,57 @@ void check_error_bound(const HeightField& f, const std::vector<float>& threshold
     const double measured = g.max_vertical_error(m);
     EXPECT_LE(measured, double(e)) << "threshold " << e << " violated on a " << f.width << "x" << f.height << " grid";
     expect_conforming_cover(m, double(f.width - 1), double(f.height - 1));
+  }
+}
+
+// extract_mesh's one-pass descent against the two-step path it replaces (extract_fast, then to_mesh):
+// the same triangles (compared by their corner positions, since vertex numbering may differ), the same
+// lattice ids per vertex, the same front afterwards, and the error bound. Grid sizes include padded ones
+// (not 2^k + 1) and forced tile sizes; thresholds include 0 (full refinement).
+TEST(Grid48, ExtractMeshEqualsExtractFastThenToMesh) {
+  using Tri = std::array<std::array<float, 3>, 3>;
+  auto triangles = [](const TriMesh& m, const std::vector<Index>& ids, std::map<std::array<float, 3>, Index>& id_of) {
+    std::multiset<Tri> out;
+    for (std::size_t f = 0; f < m.num_faces(); ++f) {
+      Tri t;
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec3 p = m.positions[m.corner(f, k)];
+        t[k] = {p.x, p.y, p.z};
+        const auto [it, fresh] = id_of.emplace(t[k], ids[m.corner(f, k)]);
+        EXPECT_EQ(it->second, ids[m.corner(f, k)]) << "one position, two lattice ids";
+      }
+      std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());  // keeps the orientation
+      out.insert(t);
+    }
+    return out;
+  };
+  std::mt19937 rng(2026);
+  for (int round = 0; round < 12; ++round) {
+    const auto w = static_cast<std::size_t>(2 + rng() % 90), h = static_cast<std::size_t>(2 + rng() % 90);
+    const HeightField f = make_fractal_terrain(w, h, 100 + static_cast<std::uint32_t>(round), 40.0f);
+    Grid48Options o;
+    if (round % 3 == 1) o.tile_size = std::size_t{1} << (1 + rng() % 4);
+    const Grid48 g(f, o);
+    for (float e : {0.0f, 0.5f, 3.0f, 15.0f, 200.0f}) {
+      Query q;
+      q.criterion = Criterion::object_error(e);
+      Grid48Front two_step(g), one_pass(g);
+      two_step.extract_fast(q);
+      std::vector<Index> ids_a, ids_b;
+      const TriMesh a = two_step.to_mesh(&ids_a);
+      const TriMesh b = one_pass.extract_mesh(q, &ids_b);
+      ASSERT_EQ(ids_b.size(), b.num_vertices());
+      std::map<std::array<float, 3>, Index> id_a, id_b;
+      EXPECT_EQ(triangles(a, ids_a, id_a), triangles(b, ids_b, id_b)) << w << "x" << h << " threshold " << e;
+      EXPECT_EQ(id_a, id_b) << w << "x" << h << " threshold " << e;
+      EXPECT_EQ(a.num_vertices(), b.num_vertices()) << "no unreferenced or duplicated vertices";
+      // The front itself: the same state as extract() leaves.
+      std::vector<Index> ids_c;
+      const TriMesh c = one_pass.to_mesh(&ids_c);
+      EXPECT_EQ(c.indices, a.indices);
+      EXPECT_EQ(c.positions, a.positions);
+      EXPECT_LE(g.max_vertical_error(b), double(e)) << w << "x" << h << " threshold " << e;
+    }
   }
 }
 
