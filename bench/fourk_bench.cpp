@@ -396,11 +396,13 @@ void bench_orbit(const Options& o, const Mt& mt, const TriMesh& base) {
   std::vector<Query> qs;
   for (const Camera& c : cams) qs.push_back(orbit_query(c, tau));
 
-  Laps t_up, t_ex;
-  std::vector<double> faces, changed, eval_up, eval_ex;
-  std::vector<std::size_t> n_up(K + 1), n_ex(K + 1);
-  std::vector<std::uint64_t> h_up(K + 1), h_ex(K + 1);
-  std::size_t count_diff = 0, set_diff = 0, finer = 0, coarser = 0, max_delta = 0, rep_diff = 0;
+  Laps t_up, t_ex, t_co;
+  std::vector<double> faces, changed, eval_up, eval_ex, eval_co, reused_co;
+  std::vector<std::size_t> n_up(K + 1), n_ex(K + 1), n_co(K + 1);
+  std::vector<std::uint64_t> h_up(K + 1), h_ex(K + 1), h_co(K + 1);
+  std::size_t count_diff = 0, set_diff = 0, finer = 0, coarser = 0, max_delta = 0, rep_diff = 0, coherent_diff = 0;
+  MtFront cf(mt);
+  QueryCoherence coherence;
   for (int rep = 0; rep < o.reps; ++rep) {
     extract(a, qs[0]);  // the update front starts at frame 0, untimed
     for (int i = 1; i <= K; ++i) {
@@ -415,6 +417,21 @@ void bench_orbit(const Options& o, const Mt& mt, const TriMesh& base) {
       if (rep == 0) {
         changed.push_back(static_cast<double>(st.coarsened + st.refined));
         eval_up.push_back(static_cast<double>(st.evaluated));
+      }
+    }
+    // update() with frame-to-frame coherence on a third front (the coherence memory persists across reps,
+    // as it would in an application; its first frame of the first rep evaluates everything).
+    extract(cf, qs[0]);
+    for (int i = 1; i <= K; ++i) {
+      const Stopwatch sw;
+      const QueryStats st = update(cf, qs[static_cast<std::size_t>(i)], coherence);
+      t_co.add(sw.lap());
+      const auto u = static_cast<std::size_t>(i);
+      n_co[u] = cf.num_faces();
+      h_co[u] = face_hash(cf);
+      if (rep == 0) {
+        eval_co.push_back(static_cast<double>(st.evaluated));
+        reused_co.push_back(static_cast<double>(st.reused));
       }
     }
     for (int i = 1; i <= K; ++i) {
@@ -435,6 +452,7 @@ void bench_orbit(const Options& o, const Mt& mt, const TriMesh& base) {
         max_delta = std::max(max_delta, n_up[u] > n_ex[u] ? n_up[u] - n_ex[u] : n_ex[u] - n_up[u]);
       }
       if (h_up[u] != h_ex[u]) ++set_diff;
+      if (n_co[u] != n_ex[u] || h_co[u] != h_ex[u]) ++coherent_diff;
     }
   }
   a.validate();
@@ -479,8 +497,14 @@ void bench_orbit(const Options& o, const Mt& mt, const TriMesh& base) {
   std::printf("\n| method | CPU ms / frame median | CPU p95 | wall ms / frame median | wall p95 |\n|---|---|---|---|---|\n");
   std::printf("| update() (incremental) | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_up.cpu_med(), 1e3 * t_up.cpu_p95(),
               1e3 * t_up.wall_med(), 1e3 * t_up.wall_p95());
+  std::printf("| update() with QueryCoherence | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_co.cpu_med(),
+              1e3 * t_co.cpu_p95(), 1e3 * t_co.wall_med(), 1e3 * t_co.wall_p95());
   std::printf("| extract() from scratch | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_ex.cpu_med(), 1e3 * t_ex.cpu_p95(),
               1e3 * t_ex.wall_med(), 1e3 * t_ex.wall_p95());
+  std::printf("  extract / coherent update (CPU medians) = %.2fx; coherent update: %.0f evaluations and %.0f reused "
+              "answers per frame (median); frames differing from extract(): %zu of %d\n",
+              t_ex.cpu_med() / t_co.cpu_med(), quantile(eval_co, 0.5), quantile(reused_co, 0.5), coherent_diff,
+              K * o.reps);
   std::printf("  extract / update (CPU medians) = %.2fx (wall %.2fx)\n", t_ex.cpu_med() / t_up.cpu_med(),
               t_ex.wall_med() / t_up.wall_med());
   std::printf("  frames compared: %d; face count differs in %zu (update finer %zu, coarser %zu, max |delta| %zu); "

@@ -14,6 +14,10 @@ void MtFront::reset() {
   faces_.clear();
   slot_.assign(mt_->num_faces(), kInvalid);
   num_applied_ = 0;
+  refine_set_.list.clear();
+  refine_set_.pos.assign(mt_->num_nodes(), kInvalid);
+  coarsen_set_.list.clear();
+  coarsen_set_.pos.assign(mt_->num_nodes(), kInvalid);
   apply(0);
 }
 
@@ -48,6 +52,12 @@ void MtFront::apply(NodeId n) {
   for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f) add_face(f);
   applied_[n] = 1;
   ++num_applied_;
+  // Candidates: n is refined now and undoable (its whole image is current); its parents lost a face each.
+  refine_set_.erase(n);
+  for (NodeId p : mt_->parents(n)) coarsen_set_.erase(p);
+  if (n != 0) coarsen_set_.insert(n);
+  for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f)
+    if (const NodeId d = mt_->destroyer(f); d != kInvalid) refine_set_.insert(d);
 }
 
 void MtFront::undo(NodeId n) {
@@ -61,6 +71,19 @@ void MtFront::undo(NodeId n) {
   for (FaceId f : mt_->pre_image(n)) add_face(f);
   applied_[n] = 0;
   --num_applied_;
+  // Candidates: n can be applied again; a child keeps its place only through another pre-image face; a
+  // parent whose image is whole again can be undone.
+  coarsen_set_.erase(n);
+  refine_set_.insert(n);
+  for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f) {
+    const NodeId d = mt_->destroyer(f);
+    if (d == kInvalid || !refine_set_.contains(d)) continue;
+    bool exposed = false;
+    for (FaceId g : mt_->pre_image(d)) exposed = exposed || has_face(g);
+    if (!exposed) refine_set_.erase(d);
+  }
+  for (NodeId p : mt_->parents(n))
+    if (can_undo(p)) coarsen_set_.insert(p);
 }
 
 TriMesh MtFront::to_mesh(std::vector<FaceId>* face_ids, std::vector<VertexId>* vertex_ids) const {
@@ -115,6 +138,17 @@ void MtFront::validate() const {
     }
   }
   if (expected != faces_.size()) fail("face list has extra entries", faces_.size());
+  // The candidate sets are exactly their definitions.
+  for (NodeId n = 0; n < mt.num_nodes(); ++n) {
+    bool exposed = false;
+    for (FaceId g : mt.pre_image(n)) exposed = exposed || has_face(g);
+    if (refine_set_.contains(n) != (!applied_[n] && exposed))
+      fail("node " + std::to_string(n) + ": refine candidate set is stale", n);
+    if (coarsen_set_.contains(n) != can_undo(n)) fail("node " + std::to_string(n) + ": coarsen candidate set is stale", n);
+    for (const NodeSet* set : {&refine_set_, &coarsen_set_})
+      if (set->contains(n) && (set->pos[n] >= set->list.size() || set->list[set->pos[n]] != n))
+        fail("node " + std::to_string(n) + ": candidate list is corrupt", n);
+  }
   // Conformity: every directed edge appears once, and its reverse at most once.
   std::vector<std::uint64_t> edges;
   edges.reserve(faces_.size() * 3);

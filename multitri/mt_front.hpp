@@ -9,7 +9,9 @@
 /// what they need (refining applies missing ancestors first, coarsening undoes applied descendants first).
 /// All four throw InvalidInput naming the node when it is not a node of the Mt.
 /// Cost: O(faces changed) per node; legality tests O(faces of the node) from the face table, so a front
-/// holds no per-node counters.
+/// holds no per-node counters. The front keeps its refine candidates (unapplied nodes with a pre-image face
+/// in the front) and coarsen candidates (undoable nodes) in two lists maintained by apply/undo, so that a
+/// query lists them in O(their number) instead of walking every face of the front.
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -71,30 +73,18 @@ class MtFront {
   ElementBound element_bound(NodeId n) const noexcept { return mt_->bound(n); }
   bool is_refined(NodeId n) const noexcept { return applied_[n] != 0; }
   std::uint64_t tie_key(NodeId n) const noexcept { return n; }
+  /// Each node that is not applied and has a pre-image face in the front, once (fn must not move the front).
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
-    // Each destroyer once: from the first face of its pre-image that is in the front.
-    for (FaceId f : faces_) {
-      const NodeId d = mt_->destroyer(f);
-      if (d == kInvalid) continue;
-      bool first = true;
-      for (FaceId g : mt_->pre_image(d)) {
-        if (g == f) break;
-        if (has_face(g)) {
-          first = false;
-          break;
-        }
-      }
-      if (first) fn(d);
-    }
+    for (NodeId d : refine_set_.list) fn(d);
   }
   template <class Fn> void for_each_child_candidate(NodeId n, Fn&& fn) const {
     for (NodeId c : mt_->children(n)) fn(c);
   }
   bool is_coarsenable(NodeId n) const noexcept { return can_undo(n); }
+  /// Each node that can be undone (applied, whole image in the front; never the source), once (fn must not
+  /// move the front).
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
-    // A maximal applied node has its whole image in the front, so its faces' creators list it.
-    for (FaceId f : faces_)
-      if (const NodeId c = mt_->creator(f); mt_->image_begin(c) == f && can_undo(c)) fn(c);
+    for (NodeId c : coarsen_set_.list) fn(c);
   }
   template <class Fn> void for_each_parent_candidate(NodeId n, Fn&& fn) const {
     for (NodeId p : mt_->parents(n)) fn(p);
@@ -113,6 +103,26 @@ class MtFront {
   void check_node(NodeId n, const char* move) const;
   void add_face(FaceId f);
   void remove_face(FaceId f);
+  // An unordered set of nodes: a list and each node's position in it (kInvalid when absent).
+  struct NodeSet {
+    std::vector<NodeId> list;
+    std::vector<Index> pos;
+    bool contains(NodeId n) const noexcept { return pos[n] != kInvalid; }
+    void insert(NodeId n) {
+      if (pos[n] != kInvalid) return;
+      pos[n] = static_cast<Index>(list.size());
+      list.push_back(n);
+    }
+    void erase(NodeId n) noexcept {
+      const Index p = pos[n];
+      if (p == kInvalid) return;
+      const NodeId last = list.back();
+      list[p] = last;
+      pos[last] = p;
+      list.pop_back();
+      pos[n] = kInvalid;
+    }
+  };
 
   const Mt* mt_;
   std::vector<std::uint8_t> applied_;
@@ -120,6 +130,8 @@ class MtFront {
   std::vector<Index> slot_;              // position of a face in faces_, kInvalid if absent
   std::size_t num_applied_ = 0;
   std::vector<NodeId> stack_;
+  NodeSet refine_set_;   // unapplied nodes with a pre-image face in the front
+  NodeSet coarsen_set_;  // nodes other than the source with can_undo()
 };
 
 template <class Sink>

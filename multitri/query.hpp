@@ -66,6 +66,18 @@ class Criterion {
   static Criterion any_of(std::vector<Criterion> parts);
 
   bool is_fine(const ElementBound& b) const;
+  /// is_fine() and a conservative margin (length units, may be +infinity) for coherent updates: the answer
+  /// for b stays the same while no view-dependent leaf moves by `margin` or more, where a leaf's move at b
+  /// is bounded by motion_to() (the eye's displacement for screen_error / back_facing /
+  /// away_from_silhouette; a frustum plane's change in signed distance at b.center for outside_frustum).
+  /// Leaves that do not depend on a view give +infinity, custom() leaves 0 (always re-evaluated).
+  bool is_fine_with_margin(const ElementBound& b, float& margin) const;
+  /// Compares this criterion with `next`, the same criterion for a moved camera. Returns false when they
+  /// differ otherwise (shape, thresholds, viewport, feature points): then no margin carries over. Else
+  /// raises `turn` to at least the largest change of a frustum plane's unit normal and `shift` to at least
+  /// the largest eye displacement and frustum plane offset change measured at `origin`, so that the move of
+  /// every leaf at a point c is at most turn * |c - origin| + shift.
+  bool motion_to(const Criterion& next, const glm::vec3& origin, double& turn, double& shift) const;
   /// Priority for budgeted refinement: the largest screen-space error of the screen_error leaves if any,
   /// else the bound's object error. Monotone on nested bounds.
   float priority(const ElementBound& b) const;
@@ -98,6 +110,7 @@ struct Query {
 
 struct QueryStats {
   std::size_t evaluated = 0;  ///< criterion evaluations
+  std::size_t reused = 0;     ///< answers reused from a QueryCoherence (update() with coherence only)
   std::size_t refined = 0;    ///< elements refined (forced ones included)
   std::size_t coarsened = 0;  ///< elements coarsened
   bool budget_reached = false;
@@ -124,6 +137,71 @@ concept RefinableFront = requires(F& f, const F& cf, Index e, void (*fn)(Index))
   cf.for_each_child_candidate(e, fn);
   cf.for_each_coarsen_candidate(fn);
   cf.for_each_parent_candidate(e, fn);
+};
+
+/// Frame-to-frame coherence for update() (the overload taking one): it remembers, per element, the
+/// criterion's answer and how far the view may move before that answer can change (Criterion::
+/// is_fine_with_margin), and accumulates the view's motion between calls (Criterion::motion_to). An
+/// element whose margin is not yet used up is answered from memory, without fetching its bound. The
+/// answers are exactly those of a fresh evaluation (margins are conservative, floating-point slack
+/// included), so update() with coherence returns the same front as without.
+///
+/// Answers depend only on an element's bound and on the query, so one QueryCoherence serves any front of
+/// ONE structure; call invalidate() before using it with another structure. It falls back to plain
+/// evaluation (and forgets) for queries with a focus set or a triangle budget, or when the criterion
+/// changed otherwise than by its camera. Memory: 16 bytes per element index seen.
+class QueryCoherence {
+ public:
+  /// Forgets every answer (e.g. before serving another structure).
+  void invalidate() noexcept {
+    valid_ = false;
+    next_generation();
+  }
+  /// Prepares a frame for query q (update() calls it). Returns false when q cannot use coherence.
+  bool begin(const Query& q);
+  /// wants(q) for element e, from memory when its margin allows; bound() gives the element's bound.
+  template <class BoundFn>
+  bool wants(Index e, const Query& q, BoundFn&& bound, QueryStats& stats) {
+    if (e >= records_.size()) records_.resize(std::size_t{e} + 1 + records_.size() / 2);
+    Record& r = records_[e];
+    if ((r.tag >> 1) == generation_ && turn_ * static_cast<double>(r.reach) + shift_ < r.limit) {
+      ++stats.reused;
+      return (r.tag & 1u) != 0;
+    }
+    ++stats.evaluated;
+    const ElementBound b = bound();
+    if (!has_origin_) {
+      origin_ = b.center;
+      has_origin_ = true;
+    }
+    float margin = 0.0f;
+    const bool wanted = !q.criterion.is_fine_with_margin(b, margin);
+    r.tag = generation_ << 1 | (wanted ? 1u : 0u);
+    r.reach = glm::length(b.center - origin_);
+    r.limit = turn_ * static_cast<double>(r.reach) + shift_ + static_cast<double>(margin);
+    return wanted;
+  }
+
+ private:
+  struct Record {
+    double limit = 0.0;  // valid while turn_ * reach + shift_ < limit
+    float reach = 0.0f;  // |centre - origin_|
+    std::uint32_t tag = 0;  // generation << 1 | wanted
+  };
+  void next_generation() noexcept {
+    if (++generation_ >= (1u << 31)) {  // the 31-bit field would wrap: clear the records instead
+      for (Record& r : records_) r.tag = 0;
+      generation_ = 1;
+    }
+    turn_ = shift_ = 0.0;
+  }
+  std::vector<Record> records_;
+  std::uint32_t generation_ = 1;  // records of other generations are stale
+  bool valid_ = false;            // last_ holds the previous frame's criterion
+  bool has_origin_ = false;
+  glm::vec3 origin_{0.0f};
+  double turn_ = 0.0, shift_ = 0.0;  // accumulated view motion of this generation
+  Criterion last_ = Criterion::object_error(0.0f);
 };
 
 namespace detail {
@@ -161,14 +239,13 @@ struct CoarsenOrder {
 };
 inline bool before(const Keyed& a, const Keyed& b) { return RefineOrder{}(b, a); }
 
-template <RefinableFront F>
-void refine_unbudgeted(F& front, const Query& q, std::vector<Index>& stack, QueryStats& stats, Deadline& deadline) {
+template <RefinableFront F, class Wants>
+void refine_unbudgeted(F& front, Wants&& wants, std::vector<Index>& stack, QueryStats& stats, Deadline& deadline) {
   while (!stack.empty()) {
     const Index e = stack.back();
     stack.pop_back();
     if (front.is_refined(e)) continue;
-    ++stats.evaluated;
-    if (!q.wants(front.element_bound(e))) continue;
+    if (!wants(e)) continue;
     if (deadline.passed()) {
       stats.time_reached = true;
       return;
@@ -210,6 +287,41 @@ void refine_budgeted(F& front, const Query& q, std::priority_queue<Keyed, std::v
   }
 }
 
+
+template <RefinableFront F>
+auto plain_wants(const F& front, const Query& q, QueryStats& stats) {
+  return [&front, &q, &stats](Index e) {
+    ++stats.evaluated;
+    return q.wants(front.element_bound(e));
+  };
+}
+
+// Step 1 of update(): coarsen maximal elements that are no longer wanted, and their parents in turn.
+template <RefinableFront F, class Wants>
+void coarsen_unwanted(F& front, Wants&& wants, QueryStats& stats) {
+  std::vector<Index> work;
+  front.for_each_coarsen_candidate([&](Index e) { work.push_back(e); });
+  while (!work.empty()) {
+    const Index e = work.back();
+    work.pop_back();
+    // Ask the criterion first: most candidates are still wanted, and is_coarsenable can cost a 1-ring walk
+    // (SrMesh checks the Kim-Lee degenerate case there).
+    if (wants(e)) continue;
+    if (!front.is_coarsenable(e)) continue;
+    front.coarsen_one(e);
+    ++stats.coarsened;
+    front.for_each_parent_candidate(e, [&](Index p) { work.push_back(p); });
+  }
+}
+
+template <RefinableFront F, class Wants>
+void update_unbudgeted(F& front, Wants&& wants, QueryStats& stats, Deadline& deadline) {
+  coarsen_unwanted(front, wants, stats);
+  std::vector<Index> stack;
+  front.for_each_refine_candidate([&](Index e) { stack.push_back(e); });
+  refine_unbudgeted(front, wants, stack, stats, deadline);
+}
+
 }  // namespace detail
 
 /// Refines from the coarsest state (see the file comment). Returns counters.
@@ -221,7 +333,7 @@ QueryStats extract(F& front, const Query& q) {
   if (q.triangle_budget == 0) {
     std::vector<Index> stack;
     front.for_each_refine_candidate([&](Index e) { stack.push_back(e); });
-    detail::refine_unbudgeted(front, q, stack, stats, deadline);
+    detail::refine_unbudgeted(front, detail::plain_wants(front, q, stats), stack, stats, deadline);
   } else {
     std::priority_queue<detail::Keyed, std::vector<detail::Keyed>, detail::RefineOrder> heap;
     front.for_each_refine_candidate([&](Index e) {
@@ -234,32 +346,17 @@ QueryStats extract(F& front, const Query& q) {
   return stats;
 }
 
+
 /// Moves an existing front to the answer of `q` (see the file comment). Returns counters.
 template <RefinableFront F>
 QueryStats update(F& front, const Query& q) {
   QueryStats stats;
   detail::Deadline deadline(q.time_budget_ms);
-  // 1. Coarsen maximal elements that are no longer wanted, and their parents in turn.
-  std::vector<Index> work;
-  front.for_each_coarsen_candidate([&](Index e) { work.push_back(e); });
-  while (!work.empty()) {
-    const Index e = work.back();
-    work.pop_back();
-    // Ask the criterion first: most candidates are still wanted, and is_coarsenable can cost a 1-ring walk
-    // (SrMesh checks the Kim-Lee degenerate case there).
-    ++stats.evaluated;
-    if (q.wants(front.element_bound(e))) continue;
-    if (!front.is_coarsenable(e)) continue;
-    front.coarsen_one(e);
-    ++stats.coarsened;
-    front.for_each_parent_candidate(e, [&](Index p) { work.push_back(p); });
-  }
   if (q.triangle_budget == 0) {
-    std::vector<Index> stack;
-    front.for_each_refine_candidate([&](Index e) { stack.push_back(e); });
-    detail::refine_unbudgeted(front, q, stack, stats, deadline);
+    detail::update_unbudgeted(front, detail::plain_wants(front, q, stats), stats, deadline);
     return stats;
   }
+  detail::coarsen_unwanted(front, detail::plain_wants(front, q, stats), stats);
   // 2. Budget: make the refined set a prefix of the priority order, fit it in the budget, then grow it.
   using detail::Keyed;
   std::priority_queue<Keyed, std::vector<Keyed>, detail::RefineOrder> refine_heap;
@@ -303,6 +400,18 @@ QueryStats update(F& front, const Query& q) {
     }
   }
   detail::refine_budgeted(front, q, refine_heap, stats, deadline);
+  return stats;
+}
+
+/// update() with frame-to-frame coherence (see QueryCoherence): the same front as update(front, q), with
+/// fewer criterion evaluations when the camera moves a little between calls.
+template <RefinableFront F>
+QueryStats update(F& front, const Query& q, QueryCoherence& coherence) {
+  if (!coherence.begin(q)) return update(front, q);
+  QueryStats stats;
+  detail::Deadline deadline(q.time_budget_ms);
+  auto wants = [&](Index e) { return coherence.wants(e, q, [&] { return front.element_bound(e); }, stats); };
+  detail::update_unbudgeted(front, wants, stats, deadline);
   return stats;
 }
 

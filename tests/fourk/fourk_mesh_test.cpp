@@ -15,6 +15,8 @@
 
 #include <gtest/gtest.h>
 
+#include "mesh_fixtures.hpp"
+
 #include "multitri/errors.hpp"
 #include "multitri/mt_front.hpp"
 
@@ -70,23 +72,7 @@ TriMesh square() {
   return m;
 }
 
-// A closed torus grid of nu x nv quads, each cut along a diagonal.
-TriMesh torus(int nu, int nv) {
-  TriMesh m;
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const float u = 6.2831853f * float(i) / float(nu), v = 6.2831853f * float(j) / float(nv);
-      m.positions.push_back({std::cos(u) * (2.0f + 0.7f * std::cos(v)), std::sin(u) * (2.0f + 0.7f * std::cos(v)),
-                             0.7f * std::sin(v)});
-    }
-  auto id = [&](int i, int j) { return static_cast<Index>(((j + nv) % nv) * nu + (i + nu) % nu); };
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
-      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
-    }
-  return m;
-}
+TriMesh torus(int nu, int nv) { return testing::torus_grid(nu, nv); }
 
 TriMesh tetrahedron() {
   TriMesh m;

@@ -20,6 +20,8 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "mesh_fixtures.hpp"
+
 #include "mt_oracles.hpp"
 #include "test_support.hpp"
 
@@ -42,22 +44,7 @@ Tri canonical(Tri t) {
 
 // --- generated meshes ----------------------------------------------------------------------------------
 
-TriMesh torus(int nu, int nv) {
-  TriMesh m;
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const float u = 6.2831853f * float(i) / float(nu), v = 6.2831853f * float(j) / float(nv);
-      m.positions.push_back({std::cos(u) * (2.0f + 0.7f * std::cos(v)), std::sin(u) * (2.0f + 0.7f * std::cos(v)),
-                             0.7f * std::sin(v)});
-    }
-  auto id = [&](int i, int j) { return static_cast<Index>(((j + nv) % nv) * nu + (i + nu) % nu); };
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
-      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
-    }
-  return m;
-}
+TriMesh torus(int nu, int nv) { return testing::torus_grid(nu, nv); }
 
 // A polar disc: a fan of k triangles around the centre, then `rings` - 1 rings of k quads cut in two.
 // k + 2k(rings - 1) faces: odd when k is odd.
@@ -431,30 +418,38 @@ void check_dual_matching(const TriMesh& m, const DualMatching& dm, bool brute) {
   EXPECT_EQ(border_faces, dm.num_border_faces);
 }
 
+// A w x h grid of unit squares, each cut along a random diagonal; keep(number of faces) of its faces, chosen
+// at random, are kept (the grid's vertices all stay: unreferenced ones included). Borders, several components
+// and non-manifold vertices arise at random.
+template <class Keep>
+TriMesh random_grid_subset(int w, int h, std::mt19937& rng, Keep keep) {
+  TriMesh grid;
+  for (int y = 0; y <= h; ++y)
+    for (int x = 0; x <= w; ++x) grid.positions.push_back({float(x), float(y), 0.0f});
+  std::vector<std::array<Index, 3>> faces;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const Index a = Index(y * (w + 1) + x), b = a + 1, c = a + Index(w) + 2, d = a + Index(w) + 1;
+      if (rng() % 2) {
+        faces.push_back({a, b, c});
+        faces.push_back({a, c, d});
+      } else {
+        faces.push_back({a, b, d});
+        faces.push_back({b, c, d});
+      }
+    }
+  std::shuffle(faces.begin(), faces.end(), rng);
+  const std::size_t kept = keep(faces.size());
+  for (std::size_t i = 0; i < kept; ++i) grid.indices.insert(grid.indices.end(), faces[i].begin(), faces[i].end());
+  return grid;
+}
+
 // Random face subsets of a triangulated grid: borders, several components, non-manifold vertices.
 TEST(DualMatching, RandomSmallMeshesAgainstBruteForce) {
   std::mt19937 rng(5);
   std::size_t leftovers = 0, moved = 0;
   for (int trial = 0; trial < 250; ++trial) {
-    TriMesh grid;
-    const int w = 5, h = 4;
-    for (int y = 0; y <= h; ++y)
-      for (int x = 0; x <= w; ++x) grid.positions.push_back({float(x), float(y), 0.0f});
-    std::vector<std::array<Index, 3>> faces;
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const Index a = Index(y * (w + 1) + x), b = a + 1, c = a + Index(w) + 2, d = a + Index(w) + 1;
-        if (rng() % 2) {
-          faces.push_back({a, b, c});
-          faces.push_back({a, c, d});
-        } else {
-          faces.push_back({a, b, d});
-          faces.push_back({b, c, d});
-        }
-      }
-    std::shuffle(faces.begin(), faces.end(), rng);
-    const std::size_t keep = 6 + rng() % 13;
-    for (std::size_t i = 0; i < keep; ++i) grid.indices.insert(grid.indices.end(), faces[i].begin(), faces[i].end());
+    const TriMesh grid = random_grid_subset(5, 4, rng, [&](std::size_t) { return 6 + rng() % 13; });
     const DualMatching dm = match_dual_faces(grid, true);
     check_dual_matching(grid, dm, true);
     leftovers += dm.num_leftovers;
@@ -471,25 +466,8 @@ TEST(DualMatching, LargerRandomMeshesLeaveOnlyBorderFaces) {
   std::mt19937 rng(23);
   std::size_t leftovers = 0, moved = 0;
   for (int trial = 0; trial < 120; ++trial) {
-    const int w = 12, h = 10;
-    TriMesh grid;
-    for (int y = 0; y <= h; ++y)
-      for (int x = 0; x <= w; ++x) grid.positions.push_back({float(x), float(y), 0.0f});
-    std::vector<std::array<Index, 3>> faces;
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const Index a = Index(y * (w + 1) + x), b = a + 1, c = a + Index(w) + 2, d = a + Index(w) + 1;
-        if (rng() % 2) {
-          faces.push_back({a, b, c});
-          faces.push_back({a, c, d});
-        } else {
-          faces.push_back({a, b, d});
-          faces.push_back({b, c, d});
-        }
-      }
-    std::shuffle(faces.begin(), faces.end(), rng);
-    const std::size_t keep = faces.size() * (60 + rng() % 40) / 100;
-    for (std::size_t i = 0; i < keep; ++i) grid.indices.insert(grid.indices.end(), faces[i].begin(), faces[i].end());
+    const TriMesh grid =
+        random_grid_subset(12, 10, rng, [&](std::size_t all) { return all * (60 + rng() % 40) / 100; });
     const DualMatching dm = match_dual_faces(grid, true);
     check_dual_matching(grid, dm, false);
     leftovers += dm.num_leftovers;

@@ -903,5 +903,120 @@ TEST(QueryBounds, EncloseConesContainsBothOrIsFull) {
   EXPECT_TRUE(enclose(NormalCone{{0, 0, 1}, 0.9f}, NormalCone{{0, 0, -1}, 0.9f}).is_full());
 }
 
+// --- frame-to-frame coherence (QueryCoherence) -----------------------------------------------------------
+
+// A camera on a circle around the terrain, looking at its middle: step k of n per turn.
+Camera orbit_camera(int k, int steps_per_turn, float domain, float height) {
+  Camera c;
+  const float a = 6.2831853f * float(k) / float(steps_per_turn);
+  c.target = {0.5f * domain, 0.5f * domain, 0.0f};
+  c.eye = c.target + glm::vec3(std::cos(a), std::sin(a), 0.0f) * (0.9f * domain) + glm::vec3(0.0f, 0.0f, height);
+  c.fov_y_deg = 50.0f;
+  c.aspect = 4.0f / 3.0f;
+  c.z_near = 0.05f;
+  c.z_far = 10.0f * domain;
+  return c;
+}
+
+// The view-dependent criterion of the benches, plus the silhouette and feature-point leaves.
+Criterion view_criterion(const Camera& cam, float pixels, int variant) {
+  switch (variant % 3) {
+    case 0:
+      return Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
+                                Criterion::screen_error(cam, 600.0f, pixels)});
+    case 1:
+      return Criterion::all_of({Criterion::any_of({Criterion::away_from_silhouette(cam.eye), Criterion::object_error(0.02f)}),
+                                Criterion::screen_error(cam, 600.0f, pixels)});
+    default:
+      return Criterion::any_of({Criterion::outside_frustum(cam.frustum()),
+                                Criterion::all_of({Criterion::screen_error(cam, 600.0f, pixels),
+                                                   Criterion::away_from_points({{1.0f, 1.0f, 0.0f}}, 0.2f)})});
+  }
+}
+
+// The margin is a promise: while the view moves less than it (as motion_to measures), is_fine() keeps its
+// answer. Checked on random bounds against random small and large camera moves.
+TEST(QueryCoherence, MarginsAreConservative) {
+  std::mt19937 rng(77);
+  std::size_t checked = 0, flipped = 0, kept_with_margin = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    ElementBound b, unused;
+    nested_pair(rng, b, unused);
+    Camera a = random_camera(rng, 6.0f);
+    a.eye -= glm::vec3(3.0f, 3.0f, 0.0f);
+    a.target -= glm::vec3(3.0f, 3.0f, 0.0f);
+    Camera z = a;
+    const float step = std::pow(10.0f, uniform(rng, -4.0f, 0.0f));
+    z.eye += glm::vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)) * step;
+    z.target += glm::vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)) * step;
+    const int variant = static_cast<int>(rng() % 3);
+    const float pixels = uniform(rng, 0.5f, 30.0f);
+    const Criterion ca = view_criterion(a, pixels, variant), cz = view_criterion(z, pixels, variant);
+    const glm::vec3 origin(uniform(rng, -2, 2), uniform(rng, -2, 2), uniform(rng, -2, 2));
+    double turn = 0.0, shift = 0.0;
+    ASSERT_TRUE(ca.motion_to(cz, origin, turn, shift));
+    float margin = -1.0f;
+    const bool fine_a = ca.is_fine_with_margin(b, margin);
+    ASSERT_GE(margin, 0.0f);
+    EXPECT_EQ(fine_a, ca.is_fine(b));
+    const bool fine_z = cz.is_fine(b);
+    flipped += fine_a != fine_z;
+    const double move = turn * glm::length(b.center - origin) + shift;
+    if (move < double(margin)) {
+      ++checked;
+      kept_with_margin += fine_a == fine_z;
+      EXPECT_EQ(fine_a, fine_z) << "trial " << trial << ": margin " << margin << " but the move " << move
+                                << " changed the answer";
+    }
+  }
+  EXPECT_GT(checked, 1000u);
+  EXPECT_EQ(kept_with_margin, checked);
+  EXPECT_GT(flipped, 20u);  // the moves are large enough to change answers
+  // A changed threshold or feature point set carries nothing over.
+  const Camera cam = orbit_camera(0, 8, 3.0f, 1.0f);
+  double turn = 0.0, shift = 0.0;
+  EXPECT_FALSE(view_criterion(cam, 2.0f, 0).motion_to(view_criterion(cam, 3.0f, 0), {}, turn, shift));
+  EXPECT_FALSE(view_criterion(cam, 2.0f, 0).motion_to(view_criterion(cam, 2.0f, 1), {}, turn, shift));
+  EXPECT_FALSE(Criterion::away_from_points({{0, 0, 0}}, 1.0f)
+                   .motion_to(Criterion::away_from_points({{0, 0, 1}}, 1.0f), {}, turn, shift));
+}
+
+// update() with coherence returns exactly extract()'s front along camera paths (small steps, jumps,
+// changed criteria, budgets and focus sets in between), and reuses answers on small steps.
+TEST(QueryCoherence, UpdateWithCoherenceEqualsExtract) {
+  const GridMt g = terrain_mt(3, 6, 41);
+  const Mt& mt = g.mt;
+  MtFront coherent(mt), plain(mt);
+  QueryCoherence coherence;
+  std::mt19937 rng(8);
+  std::size_t reused = 0, evaluated_coherent = 0, evaluated_plain = 0;
+  int variant = 0;
+  float pixels = 2.0f, height = 1.0f;
+  for (int frame = 0; frame < 240; ++frame) {
+    SCOPED_TRACE("frame " + std::to_string(frame));
+    if (frame % 60 == 59) variant++;                      // another criterion shape
+    if (frame % 45 == 44) pixels *= 1.5f;                 // another threshold
+    if (frame % 37 == 36) height = uniform(rng, 0.3f, 2.0f);  // a jump
+    Query q;
+    q.criterion = view_criterion(orbit_camera(frame, 120, 3.0f, height), pixels, variant);
+    if (frame % 50 == 25) q.triangle_budget = 200;        // falls back to plain update()
+    if (frame % 50 == 30) q.focus.spheres.push_back({{1.5f, 1.5f, 0.0f}, 0.7f});
+    const QueryStats sc = update(coherent, q, coherence);
+    const QueryStats sp = update(plain, q);
+    reused += sc.reused;
+    evaluated_coherent += sc.evaluated;
+    evaluated_plain += sp.evaluated;
+    MtFront fresh(mt);
+    extract(fresh, q);
+    ASSERT_EQ(applied_set(coherent), applied_set(fresh));
+    ASSERT_EQ(applied_set(plain), applied_set(fresh));
+    if (frame % 40 == 0) {
+      ASSERT_NO_THROW(coherent.validate());
+    }
+  }
+  EXPECT_GT(reused, evaluated_coherent / 2);  // most answers come from memory on a slow orbit
+  EXPECT_LT(evaluated_coherent, evaluated_plain / 2);
+}
+
 }  // namespace
 }  // namespace varmesh
