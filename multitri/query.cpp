@@ -10,6 +10,9 @@
 namespace varmesh {
 namespace {
 
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kPi = 3.14159265f;
+
 // Angle between the cone axis and the direction from the eye to the sphere, widened by the cone's and the
 // sphere's angular radii: the region is entirely back-facing when
 // theta + alpha + beta < 90 degrees, theta = angle(axis, c - eye) (every normal points away from every
@@ -17,45 +20,43 @@ namespace {
 // Hoppe 1997). Without trigonometry (this runs for every candidate of every frame): with
 // gamma = 90 - (alpha + beta), the test is alpha + beta < 90 (cos(alpha + beta) > 0) and
 // theta < gamma, i.e. cos(theta) > cos(gamma) = sin(alpha + beta) = sin(alpha) cos(beta) + cos(alpha) sin(beta).
-bool entirely_facing(const ElementBound& b, const glm::vec3& eye, float sign) {
+//
+// With `margin`, also how far the eye may move before the answer can change (QueryCoherence). The answer
+// flips only when theta + alpha + beta crosses 90 degrees; cos is 1-Lipschitz, so that sum is at least
+// |cos(theta) - sin(alpha + beta)| away from it (and at least |cos(alpha + beta)| when alpha + beta >= 90,
+// which must first drop below 90). Moving the eye by delta <= h = (dist - r) / 2 turns c - eye by at most
+// asin(delta / dist) <= (pi / 2) delta / dist and changes beta by at most delta times the largest
+// |d beta / d dist| = r / (D sqrt(D^2 - r^2)) on [dist - h, dist + h], at D = (dist + r) / 2.
+bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float* margin) {
   const float ca = b.cone.cos_half_angle;
-  if (b.cone.is_full() || !(ca > 0.0f)) return false;  // alpha >= 90 degrees
+  if (b.cone.is_full() || !(ca > 0.0f)) {  // never facing, wherever the eye is
+    if (margin) *margin = kInf;
+    return false;
+  }
   const glm::vec3 d = b.center - eye;
   const float dist = glm::length(d);
-  if (dist <= b.radius) return false;
+  if (dist <= b.radius) {
+    if (margin) *margin = 0.0f;
+    return false;
+  }
   const float sb = std::min(1.0f, b.radius / dist);
   const float cb = std::sqrt(std::max(0.0f, 1.0f - sb * sb));
-  const float sa = std::sqrt(std::max(0.0f, 1.0f - std::min(1.0f, ca) * std::min(1.0f, ca)));
-  if (!(ca * cb - sa * sb > 0.0f)) return false;  // alpha + beta >= 90 degrees
-  return sign * glm::dot(b.cone.axis, d) / dist > sa * cb + std::min(1.0f, ca) * sb;
+  const float cac = std::min(1.0f, ca);
+  const float sa = std::sqrt(std::max(0.0f, 1.0f - cac * cac));
+  const float cos_sum = cac * cb - sa * sb;  // cos(alpha + beta)
+  const float cos_theta = sign * glm::dot(b.cone.axis, d) / dist;
+  const float sin_sum = sa * cb + cac * sb;  // sin(alpha + beta)
+  const bool result = cos_sum > 0.0f && cos_theta > sin_sum;
+  if (margin) {
+    const float angle = (cos_sum > 0.0f ? std::fabs(cos_theta - sin_sum) : -cos_sum) - 1e-5f;
+    const float h = 0.5f * (dist - b.radius), dd = 0.5f * (dist + b.radius);
+    const float rate = kPi / dist + b.radius / (dd * std::sqrt(std::max(1e-30f, dd * dd - b.radius * b.radius)));
+    *margin = angle > 0.0f ? std::min(h, angle / rate) : 0.0f;
+  }
+  return result;
 }
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kHalfPi = 1.57079632679f;
-
-// Margin of a back-facing decision (sign +1) or front-facing one (sign -1), in eye displacement. With
-// slack = 90 deg - (theta + alpha + beta) in radians, the region is entirely facing iff dist > r and slack
-// > 0. Moving the eye by delta <= h = (dist - r) / 2 turns c - eye by at most asin(delta / dist) <=
-// (pi / 2) delta / dist and changes beta = asin(r / dist) by at most delta times its derivative's largest
-// magnitude on [dist - h, dist + h], r / (D sqrt(D^2 - r^2)) at D = (dist + r) / 2. So the decision holds
-// while delta < min(h, |slack| / (pi / (2 dist) + r / (D sqrt(D^2 - r^2)))); 1e-4 rad absorbs rounding.
-float facing_margin(const ElementBound& b, const glm::vec3& eye, float sign, bool facing) {
-  const float ca = b.cone.cos_half_angle;
-  if (b.cone.is_full() || !(ca > 0.0f)) return kInf;  // never facing, wherever the eye is
-  const glm::vec3 d = b.center - eye;
-  const float dist = glm::length(d);
-  if (dist <= b.radius * 1.0001f + 1e-6f) return 0.0f;
-  const float alpha = std::acos(std::min(1.0f, ca));
-  const float beta = std::asin(std::min(1.0f, b.radius / dist));
-  const float theta = std::acos(std::clamp(sign * glm::dot(b.cone.axis, d) / dist, -1.0f, 1.0f));
-  const float slack = kHalfPi - (theta + alpha + beta);
-  if ((slack > 0.0f) != facing) return 0.0f;  // at the rounding edge: re-evaluate next time
-  const float usable = std::fabs(slack) - 1e-4f;
-  if (!(usable > 0.0f)) return 0.0f;
-  const float h = 0.5f * (dist - b.radius), dd = 0.5f * (dist + b.radius);
-  const float rate = 2.0f * kHalfPi / dist + b.radius / (dd * std::sqrt(std::max(1e-30f, dd * dd - b.radius * b.radius)));
-  return std::min(h, usable / rate);
-}
+bool entirely_facing(const ElementBound& b, const glm::vec3& eye, float sign) { return facing(b, eye, sign, nullptr); }
 
 // Rounding slack for margins computed from lengths of about `scale`.
 float rounding(float scale) { return 1e-5f * scale + 1e-30f; }
@@ -174,69 +175,75 @@ bool Criterion::is_fine(const ElementBound& b) const {
 }
 
 bool Criterion::is_fine_with_margin(const ElementBound& b, float& margin) const {
-  const bool fine = is_fine(b);
+  // Each leaf decides exactly as is_fine() does and measures its margin from the same quantities.
   switch (kind_) {
     case Kind::kObjectError:
     case Kind::kAwayFromPoints:
       margin = kInf;  // motion_to() refuses a change of threshold or points
-      break;
+      return is_fine(b);
     case Kind::kScreenError: {
+      const float len = glm::length(b.center - point_);
+      const float dist = len - b.radius;
       if (b.error <= 0.0f) {
         margin = kInf;  // fine from everywhere
-        break;
+        return true;
       }
-      // Fine iff dist >= t (t > 0) with dist = |c - eye| - r, 1-Lipschitz in the eye.
-      const float len = glm::length(b.center - point_);
+      const bool fine = dist > 0.0f && b.error * scale_ <= value_ * dist;
+      // Fine iff dist >= t (t > 0), dist being 1-Lipschitz in the eye.
       const float t = b.error * scale_ / value_;
-      const float m = std::fabs((len - b.radius) - t) - rounding(len + b.radius + t);
-      margin = ((len - b.radius >= t) == fine && m > 0.0f) ? m : 0.0f;
-      break;
+      const float m = std::fabs(dist - t) - rounding(len + b.radius + t);
+      margin = ((dist >= t) == fine && m > 0.0f) ? m : 0.0f;
+      return fine;
     }
     case Kind::kOutsideFrustum: {
-      // Outside iff some plane has signed distance < -r: it stays outside while that plane moves less than
-      // its gap; inside (or straddling) while every plane moves less than its gap.
-      float scale = glm::length(b.center) + b.radius, inside = kInf, outside = 0.0f;
+      // Outside iff some plane has signed distance < -r (Frustum::intersects_sphere): it stays outside while
+      // that plane moves less than its gap; inside (or straddling) while every plane moves less than its gap.
+      float scale = glm::length(b.center) + b.radius, inside = kInf, outside = -1.0f;
       for (const Plane& p : frustum_.planes) {
-        const float g = p.signed_distance(b.center) + b.radius;
+        const float sd = p.signed_distance(b.center);
         scale = std::max(scale, std::fabs(p.d));
-        if (g < 0.0f) outside = std::max(outside, -g);
-        else inside = std::min(inside, g);
+        if (sd < -b.radius) outside = std::max(outside, -(sd + b.radius));
+        else inside = std::min(inside, sd + b.radius);
       }
+      const bool fine = outside >= 0.0f;
       const float m = (fine ? outside : inside) - rounding(scale);
-      margin = ((outside > 0.0f) == fine && m > 0.0f) ? m : 0.0f;
-      break;
+      margin = m > 0.0f ? m : 0.0f;
+      return fine;
     }
     case Kind::kBackFacing:
-      margin = facing_margin(b, point_, 1.0f, fine);
-      break;
+      return facing(b, point_, 1.0f, &margin);
     case Kind::kAwayFromSilhouette: {
-      const bool back = entirely_facing(b, point_, 1.0f), front = entirely_facing(b, point_, -1.0f);
-      const float mb = facing_margin(b, point_, 1.0f, back), mf = facing_margin(b, point_, -1.0f, front);
+      float mb = 0.0f, mf = 0.0f;
+      const bool back = facing(b, point_, 1.0f, &mb), front = facing(b, point_, -1.0f, &mf);
+      const bool fine = back || front;
       margin = fine ? std::max(back ? mb : 0.0f, front ? mf : 0.0f) : std::min(mb, mf);
-      break;
+      return fine;
     }
     case Kind::kCustom:
       margin = 0.0f;
-      break;
+      return custom_(b);
     case Kind::kAllOf:
     case Kind::kAnyOf: {
-      // The answer holds while every part that decides it keeps its answer: for a fine any_of (or a
-      // not-fine all_of) one deciding part suffices (the largest margin), otherwise all parts count.
-      const bool one_suffices = (kind_ == Kind::kAnyOf) == fine;
-      margin = one_suffices ? 0.0f : kInf;
+      // The answer holds while the parts that decide it keep theirs: for a fine any_of (a not-fine all_of)
+      // one deciding part suffices (the largest margin among them), otherwise every part counts.
+      const bool any = kind_ == Kind::kAnyOf;
+      float keep_any = 0.0f, keep_all = kInf;  // margins if decided by one part / by all parts
+      bool decided = false;                      // some part has the deciding answer (fine for any_of)
       for (const auto& p : parts_) {
         float m = 0.0f;
         const bool part_fine = p.is_fine_with_margin(b, m);
-        if (one_suffices) {
-          if (part_fine == fine) margin = std::max(margin, m);
-        } else {
-          margin = std::min(margin, m);
+        keep_all = std::min(keep_all, m);
+        if (part_fine == any) {
+          decided = true;
+          keep_any = std::max(keep_any, m);
         }
       }
-      break;
+      margin = decided ? keep_any : keep_all;
+      return decided == any;
     }
   }
-  return fine;
+  margin = 0.0f;
+  return true;
 }
 
 bool Criterion::motion_to(const Criterion& next, const glm::vec3& origin, double& turn, double& shift) const {
