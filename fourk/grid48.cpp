@@ -110,12 +110,67 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
     const std::size_t yy = std::min(y, height_ - 1);
     for (std::size_t x = 0; x < lw_; ++x) z_[y * lw_ + x] = field.z[yy * width_ + std::min(x, width_ - 1)];
   }
+  records_.resize(lw_ * lh_);
+  for (std::size_t p = 0; p < records_.size(); ++p) records_[p] = {0.0f, z_[p]};
   if (options.reference_scan) {
     compute_errors();
     compute_radii();
   } else {
     compute_bounds_fast(options.exact_errors);
   }
+  for (std::size_t p = 0; p < records_.size(); ++p) records_[p].error = error_[p];
+  z_ = {};
+  error_ = {};
+  build_histogram();
+}
+
+namespace {
+
+// Key of a non-negative float: its bits >> 18 (monotone in the value; 32 keys per octave).
+std::uint32_t error_key(float e) noexcept {
+  std::uint32_t bits;
+  std::memcpy(&bits, &e, 4);
+  return bits >> 18;
+}
+
+}  // namespace
+
+void Grid48::build_histogram() {
+  float top = 0.0f;
+  for (const PointRecord& r : records_) top = std::max(top, r.error);
+  // Slot 0: nodes of error 0 (the padding, flat areas), which no threshold >= 0 refines; slot 1 + k: key
+  // hist_key0_ + k, where keys more than 24 octaves below the largest error share slot 1 (still a bound).
+  hist_key0_ = error_key(top * 0x1p-24f);
+  const std::size_t slots = 2 + error_key(top) - hist_key0_;
+  refined_above_.assign(slots + 1, 0);
+  faces_above_.assign(slots + 1, 0);
+  for (Index p = 0; p < num_points(); ++p) {
+    if (!is_node(p)) continue;
+    const float e = records_[p].error;
+    const std::size_t k = e > 0.0f ? 1 + std::max(error_key(e), hist_key0_) - hist_key0_ : 0;
+    ++refined_above_[k];
+    faces_above_[k] += static_cast<std::uint32_t>(num_triangles(p));
+  }
+  for (std::size_t k = slots; k-- > 0;) {
+    refined_above_[k] += refined_above_[k + 1];
+    faces_above_[k] += faces_above_[k + 1];
+  }
+}
+
+// Nodes with error > threshold >= 0 have a positive error and key >= key(threshold): the suffix sum from
+// that slot bounds them.
+std::size_t Grid48::histogram_slot(float threshold) const noexcept {
+  if (!(threshold >= 0.0f)) return 0;  // also NaN: every node may refine
+  const std::uint32_t k = std::max(error_key(threshold), hist_key0_) - hist_key0_;
+  return std::min<std::size_t>(1 + std::size_t{k}, refined_above_.size() - 1);
+}
+
+std::size_t Grid48::max_refined_above(float threshold) const noexcept {
+  return refined_above_[histogram_slot(threshold)];
+}
+
+std::size_t Grid48::max_faces_above(float threshold) const noexcept {
+  return 2 * tx_ * ty_ + faces_above_[histogram_slot(threshold)];
 }
 
 // Bottom-up error bounds (signed residual ranges) and nested radii in one finest-first pass.
@@ -286,7 +341,8 @@ void Grid48::compute_bounds_fast(bool exact) {
 std::size_t Grid48::num_nodes() const noexcept { return lw_ * lh_ - (tx_ + 1) * (ty_ + 1); }
 
 std::size_t Grid48::memory_bytes() const noexcept {
-  return (z_.size() + error_.size() + radius_.size()) * sizeof(float);
+  return records_.size() * sizeof(PointRecord) + radius_.size() * sizeof(float) +
+         (refined_above_.size() + faces_above_.size()) * sizeof(std::uint32_t);
 }
 
 namespace {
@@ -431,7 +487,7 @@ Mt Grid48::to_mt() const {
   std::vector<Index> nodes;
   for (const auto& [m, faces] : removed) nodes.push_back(m);
   std::sort(nodes.begin(), nodes.end());
-  for (Index m : nodes) b.add_node(NodeKind::kSplit, removed[m], created[m], error_[m]);
+  for (Index m : nodes) b.add_node(NodeKind::kSplit, removed[m], created[m], error(m));
   return std::move(b).build();
 }
 
@@ -462,7 +518,7 @@ double Grid48::max_vertical_error(const TriMesh& mesh) const {
         const double zi = l0 * v[0].z + l1 * v[1].z + l2 * v[2].z;
         const std::size_t s = static_cast<std::size_t>(y) * width_ + static_cast<std::size_t>(x);
         covered[s] = 1;
-        worst = std::max(worst, std::abs(zi - double(z_[static_cast<std::size_t>(y) * lw_ + static_cast<std::size_t>(x)])));
+        worst = std::max(worst, std::abs(zi - double(height_at(static_cast<Index>(static_cast<std::size_t>(y) * lw_ + static_cast<std::size_t>(x))))));
       }
   }
   for (std::uint8_t c : covered)
@@ -625,14 +681,19 @@ QueryStats Grid48Front::descend_object(float threshold, TriMesh* out, std::vecto
   const std::uint32_t lw = static_cast<std::uint32_t>(g.lattice_width());
   const std::uint32_t xmax = static_cast<std::uint32_t>(g.grid_width() - 1), ymax = static_cast<std::uint32_t>(g.grid_height() - 1);
   const std::uint32_t max_depth = static_cast<std::uint32_t>(2 * g.log2_tile());
-  const float* err = g.errors();
-  const float* z = g.heights();
+  const Grid48::PointRecord* rec = g.records();
   const float sx = g.spacing_x(), sy = g.spacing_y();
   std::uint8_t* refined = refined_.data();
-  if (kEmit && vertex_id_.size() != g.num_points()) vertex_id_.assign(g.num_points(), kInvalid);
-  Index* vid = vertex_id_.data();
-  // Output arrays sized from the last output (plus a margin), written through raw pointers, grown when full
-  // (rare) and trimmed at the end: one zero fill instead of a capacity check per push_back.
+  // The vertex map is left uninitialised (no 4 bytes per lattice point to fill on a fresh front): an entry
+  // is read only for points made vertices earlier in this same descent (see the guards below).
+  if (kEmit && vertex_id_.size != g.num_points()) {
+    vertex_id_.data.reset(new Index[g.num_points()]);
+    vertex_id_.size = g.num_points();
+  }
+  Index* vid = vertex_id_.data.get();
+  // Output arrays sized from the error histogram's upper bounds (the refined diamonds are exactly those
+  // with error > threshold), written through raw pointers and trimmed at the end: one zero fill instead of
+  // a capacity check per push_back. The growth branches are a safety net the bounds make unreachable.
   // (The hot write pointer tp is never captured by a lambda, so that it can stay in a register.)
   std::vector<glm::vec3> pos;
   std::vector<Index> lid, tri;
@@ -640,9 +701,9 @@ QueryStats Grid48Front::descend_object(float threshold, TriMesh* out, std::vecto
   Index* tp = nullptr;  // next triangle slot
   Index* tp_end = nullptr;
   if (kEmit) {
-    pos.resize(last_vertices_ + last_vertices_ / 8 + 256);
+    pos.resize((g.tiles_x() + 1) * (g.tiles_y() + 1) + g.max_refined_above(threshold));
     lid.resize(pos.size());
-    tri.resize(3 * (last_faces_ + last_faces_ / 8 + 256));
+    tri.resize(3 * g.max_faces_above(threshold));
     tp = tri.data();
     tp_end = tp + tri.size();
   }
@@ -656,7 +717,7 @@ QueryStats Grid48Front::descend_object(float threshold, TriMesh* out, std::vecto
       lid.resize(2 * nv);
     }
     const std::uint32_t y = g.py(p), x = p - y * lw;
-    pos[nv] = {float(x) * sx, float(y) * sy, z[p]};
+    pos[nv] = {float(x) * sx, float(y) * sy, rec[p].z};
     lid[nv] = p;
     vid[p] = static_cast<Index>(nv);
     return static_cast<Index>(nv++);
@@ -691,20 +752,32 @@ QueryStats Grid48Front::descend_object(float threshold, TriMesh* out, std::vecto
   std::size_t faces = 0, finest = 0;
   for (const auto& r : roots) {
     Index a = r[0], b = r[1], c = r[2];
-    Index va = kEmit ? vid[a] : 0, vb = kEmit ? vid[b] : 0, vc = kEmit ? vid[c] : 0;
+    // Tile corners outside the grid rectangle have no vertex (and no vid entry).
+    auto corner_vertex = [&](Index p) -> Index { return kEmit && (!kClip || inside(p)) ? vid[p] : 0; };
+    Index va = corner_vertex(a), vb = corner_vertex(b), vc = corner_vertex(c);
     std::uint32_t depth = 0, side = kClip ? side_of(a, b, c) : 0;
     int top = 0;
     for (;;) {
       if (depth < max_depth) {
         const Index m = (b + c) >> 1;
-        if (err[m] > threshold) {
+        if (rec[m].error > threshold) {
+          // The loads of the next levels are issued now, before the branches that need them resolve:
+          // the children's diamonds (b + a) / 2 and (c + a) / 2 and the grandchildren's (m + a, b, c) / 2
+          // (indices between lattice points, harmless, when those levels do not exist).
+          __builtin_prefetch(rec + ((a + b) >> 1));
+          __builtin_prefetch(rec + ((a + c) >> 1));
+          __builtin_prefetch(rec + ((m + a) >> 1));
+          __builtin_prefetch(rec + ((m + b) >> 1));
+          __builtin_prefetch(rec + ((m + c) >> 1));
           Index vm = 0;
           if (!refined[m]) {
             refined[m] = 1;
             *touched++ = m;
             if (kEmit && (!kClip || side == 0 || inside(m))) vm = make_vertex(m);
-          } else if (kEmit) {
-            vm = vid[m];  // garbage for points outside the rectangle: used only by triangles outside it
+          } else if (kEmit && (!kClip || side == 0 || inside(m))) {
+            // Made by the diamond's other triangle: m is inside the rectangle when this triangle is, and
+            // a point inside it was made a vertex whichever side that triangle was on.
+            vm = vid[m];
           }
           // Children (m; a, b) and (m; c, a), counter-clockwise; the second waits on the stack.
           Item& w = stack[top++];
@@ -774,8 +847,6 @@ QueryStats Grid48Front::descend_object(float threshold, TriMesh* out, std::vecto
       for (std::size_t k = 0; k < across.size(); k += 3)
         clipper.add(across[k], across[k + 1], across[k + 2], [&](Index p) { return vid[p]; });
     }
-    last_vertices_ = ids->size();
-    last_faces_ = out->indices.size() / 3;
   }
   touched_valid_ = true;
   num_refined_ = split;
@@ -984,6 +1055,7 @@ void Grid48Front::reset() {
   refined_.assign(grid_->num_points(), 0);
   touched_.resize(grid_->num_points());
   num_touched_ = 0;
+  touched_valid_ = true;  // nothing is marked: the next clear_refined has nothing to clear
   num_refined_ = 0;
   num_faces_ = 2 * grid_->tiles_x() * grid_->tiles_y();
   exposed_.reset(*grid_);

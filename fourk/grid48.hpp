@@ -19,11 +19,14 @@
 /// Hence every ready-made criterion is monotone, an extracted mesh whose triangles are all "fine" for
 /// object_error(e) is within e of every sample it covers, and update() equals extract().
 ///
-/// Memory: 12 bytes per lattice point (height, error, radius). A front adds up to 21 bytes per lattice point
+/// Memory: 12 bytes per lattice point (error and height side by side in one 8-byte record, since the descent
+/// reads both of a point at once; radius apart), plus a histogram of the errors (about 6 KB at most) that
+/// bounds the output size of an object-error extraction. A front adds up to 21 bytes per lattice point
 /// (refined flags, its boundary sets' positions, the touched list, the vertex maps of to_mesh and
 /// extract_mesh, each allocated on first use) plus its boundary sets (40 bytes per boundary diamond).
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -98,12 +101,18 @@ class Grid48 {
   std::uint32_t py(Index p) const noexcept { return row_of_.div(p); }
   glm::vec3 position(Index p) const noexcept {
     const std::uint32_t y = py(p), x = p - y * static_cast<std::uint32_t>(lw_);
-    return {static_cast<float>(x) * sx_, static_cast<float>(y) * sy_, z_[p]};
+    return {static_cast<float>(x) * sx_, static_cast<float>(y) * sy_, records_[p].z};
   }
-  float height_at(Index p) const noexcept { return z_[p]; }
-  float error(Index p) const noexcept { return error_[p]; }
+  float height_at(Index p) const noexcept { return records_[p].z; }
+  float error(Index p) const noexcept { return records_[p].error; }
   float radius(Index p) const noexcept { return radius_[p]; }
-  ElementBound bound(Index p) const noexcept { return {position(p), radius_[p], error_[p], {}}; }
+  ElementBound bound(Index p) const noexcept { return {position(p), radius_[p], records_[p].error, {}}; }
+
+  /// Upper bounds on the number of diamonds refined and of faces (unclipped) of an object-error extraction
+  /// at `threshold` (the diamonds with error > threshold), from a histogram of the errors at 1/32-octave
+  /// resolution: at most a few per cent above the true counts. O(1). Used to size output arrays.
+  std::size_t max_refined_above(float threshold) const noexcept;
+  std::size_t max_faces_above(float threshold) const noexcept;
 
   /// Calls fn(parent) for the one or two parents of node p (none for tile centres, whose parent is the
   /// source).
@@ -126,13 +135,19 @@ class Grid48 {
   // Internal layout helpers used by Grid48Front.
   int log2_tile() const noexcept { return log2_tile_; }
   bool needs_clip() const noexcept { return lw_ != width_ || lh_ != height_; }
-  const float* heights() const noexcept { return z_.data(); }
-  const float* errors() const noexcept { return error_.data(); }
+  /// A lattice point's error and height, stored together (one cache line holds both).
+  struct PointRecord {
+    float error;
+    float z;
+  };
+  const PointRecord* records() const noexcept { return records_.data(); }
 
  private:
   void compute_errors();
   void compute_radii();
   void compute_bounds_fast(bool exact);
+  void build_histogram();
+  std::size_t histogram_slot(float threshold) const noexcept;
   float sample_clamped(std::ptrdiff_t x, std::ptrdiff_t y) const noexcept;
 
   std::size_t width_ = 0, height_ = 0;  // grid samples
@@ -141,9 +156,16 @@ class Grid48 {
   int log2_tile_ = 0;
   float sx_ = 1.0f, sy_ = 1.0f;
   FastDivider row_of_;
-  std::vector<float> z_;       // lattice heights (padding repeats the border)
-  std::vector<float> error_;   // per lattice point (0 for tile corners)
-  std::vector<float> radius_;  // per lattice point
+  // Build scratch, released when the hierarchy is built: heights as contiguous rows, errors.
+  std::vector<float> z_;      // lattice heights (padding repeats the border)
+  std::vector<float> error_;  // per lattice point (0 for tile corners)
+  std::vector<PointRecord> records_;  // per lattice point: error, height
+  std::vector<float> radius_;         // per lattice point
+  // Error histogram: key(e) = float bits of e >> 18 (32 keys per octave), clamped below at hist_key0_;
+  // refined_above_[k] / faces_above_[k] = nodes (faces they remove) in slots >= k, where slot 0 holds the
+  // nodes of error 0 and slot 1 + j those with key hist_key0_ + j.
+  std::uint32_t hist_key0_ = 0;
+  std::vector<std::uint32_t> refined_above_, faces_above_;
 };
 
 /// The state of one extraction on a Grid48: which diamonds are split. Models RefinableFront (query.hpp).
@@ -192,7 +214,8 @@ class Grid48Front {
 
   /// extract_fast(q) then to_mesh(lattice_ids): the same front and the same triangles (vertex numbering may
   /// differ). For object-error queries without focus or budget (the usual terrain query) both happen in one
-  /// descent that writes vertices and triangles as it goes; other queries take the two calls.
+  /// descent that writes vertices and triangles as it goes, into arrays sized from the hierarchy's error
+  /// histogram (no growth, and no per-point map to fill on a fresh front); other queries take the two calls.
   TriMesh extract_mesh(const Query& q, std::vector<Index>* lattice_ids = nullptr);
 
   /// Frame-to-frame update for a moving camera: the same state update(front, v.to_query()) reaches (which
@@ -226,8 +249,18 @@ class Grid48Front {
   void clear_refined();
   template <bool kClip, bool kEmit>
   QueryStats descend_object(float threshold, TriMesh* out, std::vector<Index>* ids);
-  std::vector<Index> vertex_id_;  // extract_mesh scratch: valid only for points it made vertices
-  std::size_t last_vertices_ = 0, last_faces_ = 0;  // extract_mesh's last output size (first guess)
+  // extract_mesh scratch, uninitialised: valid only for points the running descent made vertices. Holds
+  // nothing between calls, so a copied front starts without one.
+  struct UninitIndices {
+    std::unique_ptr<Index[]> data;
+    std::size_t size = 0;
+    UninitIndices() = default;
+    UninitIndices(const UninitIndices&) {}
+    UninitIndices& operator=(const UninitIndices&) { return *this; }
+    UninitIndices(UninitIndices&&) = default;
+    UninitIndices& operator=(UninitIndices&&) = default;
+  };
+  UninitIndices vertex_id_;
   const Grid48* grid_;
   // 0: not refined; 1: refined. During extract_fast, 2 marks "evaluated, not wanted".
   std::vector<std::uint8_t> refined_;

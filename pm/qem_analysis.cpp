@@ -28,11 +28,39 @@ namespace varmesh {
 
 namespace {
 
-// Costs and legality are recomputed only where they can change. Node ids are never reused (a collapse
-// makes a new node vs), and a candidate's cost depends only on its two ends' quadrics and positions, so a
-// candidate edge stays valid until one of its ends dies: then it is erased from the indexed heap, and the
-// edges of vs are the only new costs. A rejected edge leaves the heap and comes back, cost unchanged, when
-// the neighbourhood of one of its ends changes.
+// enclose(a, NormalCone{n, 1}) of multitri/bounds.cpp for one unit normal n, bit for bit: the normal's
+// half-angle acos(1) is exactly 0, so its acos is skipped, and a normal already inside the cone (a dot
+// product test, acos being monotone) returns the cone without any acos. The analysis encloses a normal per
+// face at every leaf and at every collapse.
+NormalCone enclose_normal(const NormalCone& a, const glm::vec3& n) noexcept {
+  if (a.is_full()) return {};
+  const float d = std::clamp(glm::dot(a.axis, n), -1.0f, 1.0f);
+  if (d >= a.cos_half_angle) return a;
+  const float ang_a = std::acos(std::clamp(a.cos_half_angle, -1.0f, 1.0f));
+  const float between = std::acos(d);
+  if (between <= ang_a) return a;
+  if (between + ang_a <= 0.0f) return {n, 1.0f};
+  const float half = 0.5f * (between + ang_a);
+  if (half >= 3.14159f * 0.5f) return {};
+  const float t = half - ang_a;
+  glm::vec3 perp = n - a.axis * glm::dot(a.axis, n);
+  const float len = glm::length(perp);
+  if (len < 1e-12f) return {a.axis, std::cos(half)};
+  perp /= len;
+  const glm::vec3 axis = glm::normalize(a.axis * std::cos(t) + perp * std::sin(t));
+  return {axis, std::cos(half) - 1e-6f};
+}
+
+// Costs and legality are recomputed only where they can change. A candidate's cost depends only on its two
+// ends' quadrics and positions, so a candidate edge stays valid until one of its ends dies: then it is
+// erased from the indexed heap, and the edges of vs are the only new costs. A rejected edge leaves the heap
+// and comes back, cost unchanged, when the neighbourhood of one of its ends changes.
+//
+// The working state is per slot, not per node: a collapse (a, b) puts vs in a's slot and frees b's, and
+// node_of_ maps a slot to the hierarchy node it holds now. Node ids grow in collapse order (spatially
+// random), slots keep the input's vertex order, so the neighbours of a vertex stay close in memory and the
+// working arrays stay at the leaf count. Ties in the heap and the recorded data use node ids, so the
+// collapse sequence is the one a per-node state would give.
 class Analysis {
  public:
   Analysis(ManifoldInput&& in, const QemOptions& opt) : in_(std::move(in)), opt_(opt) {}
@@ -45,7 +73,7 @@ class Analysis {
     Index off = 0, cnt = 0;
   };
   struct Edge {
-    Index a, b;  // a < b
+    Index a, b;  // slots, node_of_[a] < node_of_[b]
     double cost;
   };
   // An edge as seen from one end: the other end is kept with the slot so that walking a node's edges
@@ -67,7 +95,7 @@ class Analysis {
     glm::dvec3 c[3];
     for (int k = 0; k < 3; ++k) {
       const Index v = cur_[3 * f + k];
-      c[k] = v == moved ? p : upos_[v];
+      c[k] = v == moved ? p : geo_[v].p;
     }
     return glm::cross(c[1] - c[0], c[2] - c[0]);
   }
@@ -81,14 +109,21 @@ class Analysis {
   const Index* faces_end(Index v) const { return fpool_.data() + fadj_[v].off + fadj_[v].cnt; }
   const EdgeRef* edges_begin(Index v) const { return epool_.data() + eadj_[v].off; }
   const EdgeRef* edges_end(Index v) const { return epool_.data() + eadj_[v].off + eadj_[v].cnt; }
-  static std::uint64_t tie_key(const Edge& e) { return (std::uint64_t{e.a} << 32) | e.b; }
+  std::uint64_t tie_key(const Edge& e) const { return (std::uint64_t{node_of_[e.a]} << 32) | node_of_[e.b]; }
 
   Placement place(Index a, Index b) const;
   void set_edge(Index e, Index a, Index b);
   void reinsert_edges_of(Index v);
-  double local_error(Index a, Index b, const glm::dvec3& p) const;
-  Verdict check(Index a, Index b, const glm::dvec3& p, Index& fl, Index& fr);
-  void collapse(Index a, Index b, const Placement& pl, Index fl, Index fr, double local);
+  // What check() finds on its way for the collapse that follows: the edge's faces and apexes, Hoppe's
+  // fn0..fn3, the node error increment, and (in new_normal_) the new normals of the faces that stay.
+  struct Step {
+    Index fl = kInvalid, fr = kInvalid, vl = kInvalid, vr = kInvalid;
+    int kl = -1, kr = -1;  // apex corners of fl, fr
+    std::array<Index, 4> fn{kInvalid, kInvalid, kInvalid, kInvalid};
+    double local = 0.0;  // largest distance from vs to the current planes of the faces around a and b
+  };
+  Verdict check(Index a, Index b, const glm::dvec3& p, Step& st);
+  void collapse(Index a, Index b, const Placement& pl, const Step& st);
   void init_faces();
   void init_edges();
 
@@ -98,9 +133,16 @@ class Analysis {
   double scale_ = 1.0;
   std::size_t nl_ = 0, nf_ = 0;
 
-  std::vector<glm::dvec3> upos_;  // per node, unit coordinates
+  // Per slot (see the class comment); "node" below means the node a slot holds.
+  std::vector<Index> node_of_;
   std::vector<glm::dvec3> ucol_;  // per node, scaled colours (with colours only)
-  std::vector<Quadric> q_;
+  // Per node: position in unit coordinates and quadric (without colours), one 128-byte block (a line pair
+  // fetched together): placing an edge reads both.
+  struct alignas(128) Geo {
+    glm::dvec3 p;
+    Quadric q;
+  };
+  std::vector<Geo> geo_;
   std::vector<AttributeQuadric> aq_;
   bool colors_ = false;
   std::vector<Run> fadj_;                   // per node: its live faces (only live nodes' runs are kept up to date)
@@ -115,6 +157,7 @@ class Analysis {
   std::vector<std::uint8_t> node_alive_;    // per node: in the current mesh
   std::vector<std::uint8_t> border_;        // per node: its dual piece touches the border
   std::vector<std::uint8_t> rejected_;      // per node: some edge of it was rejected and left the heap
+  std::vector<std::uint8_t> locked_;        // per node: a locked leaf
   std::vector<std::uint16_t> height_;
   std::size_t alive_vertices_ = 0, alive_faces_ = 0;
   std::vector<std::uint32_t> mark_;         // per node, stamps
@@ -122,22 +165,23 @@ class Analysis {
   std::uint32_t stamp_ = 0;
   std::vector<Index> ring_;  // scratch
   std::vector<EdgeRef> new_edges_;
+  std::vector<glm::dvec3> new_normal_;  // scratch of check() for collapse()
 
   VertexHierarchyBuilder::Raw raw_;
-  std::vector<double> uerr_;  // per node, unit coordinates
+  std::vector<double> uerr_;  // per node, unit coordinates (per slot too)
 };
 
 Analysis::Placement Analysis::place(Index a, Index b) const {
   Placement out{};
   if (colors_) {
     const AttributeQuadric q = aq_[a] + aq_[b];
-    const AttributeOptimum o = q.optimal_on_segment({upos_[a], ucol_[a]}, {upos_[b], ucol_[b]});
+    const AttributeOptimum o = q.optimal_on_segment({geo_[a].p, ucol_[a]}, {geo_[b].p, ucol_[b]});
     out.p = o.point.position;
     out.color = o.point.color;
     out.cost = o.error;
   } else {
-    const Quadric q = q_[a] + q_[b];
-    const QuadricOptimum o = q.optimal_on_segment(upos_[a], upos_[b]);
+    const Quadric q = geo_[a].q + geo_[b].q;
+    const QuadricOptimum o = q.optimal_on_segment(geo_[a].p, geo_[b].p);
     out.p = o.point;
     out.cost = o.error;
   }
@@ -146,7 +190,8 @@ Analysis::Placement Analysis::place(Index a, Index b) const {
 
 // Slot e becomes candidate (a, b), with its cost, in the heap; the caller fixes the nodes' runs.
 void Analysis::set_edge(Index e, Index a, Index b) {
-  edges_[e] = {std::min(a, b), std::max(a, b), place(a, b).cost};
+  const double cost = place(a, b).cost;
+  edges_[e] = node_of_[a] < node_of_[b] ? Edge{a, b, cost} : Edge{b, a, cost};
   heap_.update(e, edges_[e].cost, tie_key(edges_[e]));
 }
 
@@ -155,20 +200,13 @@ void Analysis::reinsert_edges_of(Index v) {
     if (!heap_.contains(e->edge)) heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
 }
 
-// Largest distance from p to the current planes of the faces around a and b (the node error increment).
-double Analysis::local_error(Index a, Index b, const glm::dvec3& p) const {
-  double local = 0.0;
-  for (Index v : {a, b})
-    for (const Index* f = faces_begin(v); f != faces_end(v); ++f)
-      local = std::max(local, std::abs(glm::dot(fnormal_[*f], p - upos_[cur_[3 * *f]])));
-  return local;
-}
-
-Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Index& fl, Index& fr) {
-  if ((a < nl_ && in_.locked[a]) || (b < nl_ && in_.locked[b])) return Verdict::kLocked;
+Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& st) {
+  if (locked_[a] || locked_[b]) return Verdict::kLocked;
   if (std::max(height_[a], height_[b]) + 1 > opt_.max_depth) return Verdict::kDepth;
   // Faces on the edge: fl has a->b, fr has b->a (from a's point of view; swapped later as needed).
-  fl = fr = kInvalid;
+  st = Step{};
+  Index& fl = st.fl;
+  Index& fr = st.fr;
   int shared = 0;
   for (const Index* it = faces_begin(a); it != faces_end(a); ++it) {
     const Index f = *it;
@@ -182,12 +220,14 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Index& 
   if (shared == 0 || shared > 2) return Verdict::kLink;
   if (shared == 1 && border_[a] == 0) return Verdict::kLink;  // cannot happen on a manifold; be safe
   if (shared == 2 && border_[a] && border_[b]) return Verdict::kLink;
-  auto apex = [&](Index f) {
+  auto apex_corner = [&](Index f) {
     for (int k = 0; k < 3; ++k)
-      if (cur_[3 * f + k] != a && cur_[3 * f + k] != b) return cur_[3 * f + k];
-    return kInvalid;
+      if (cur_[3 * f + k] != a && cur_[3 * f + k] != b) return k;
+    return -1;
   };
-  const Index vl = fl == kInvalid ? kInvalid : apex(fl), vr = fr == kInvalid ? kInvalid : apex(fr);
+  if (fl != kInvalid) st.kl = apex_corner(fl), st.vl = cur_[3 * fl + st.kl];
+  if (fr != kInvalid) st.kr = apex_corner(fr), st.vr = cur_[3 * fr + st.kr];
+  const Index vl = st.vl, vr = st.vr;
   // Link condition: common neighbours are exactly the apexes (the candidate edges are the neighbours).
   ++stamp_;
   for (const EdgeRef* e = edges_begin(a); e != edges_end(a); ++e) mark_[e->to] = stamp_;
@@ -198,90 +238,87 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Index& 
   // An apex must keep a face, and faces (a|b, vl, vr) would become duplicates (the tetrahedron case).
   for (Index x : {vl, vr})
     if (x != kInvalid && fadj_[x].cnt <= 1) return Verdict::kLink;
-  if (vl != kInvalid && vr != kInvalid) {
-    // Faces (a, vl, vr) and (b, vr, vl) would both become (vs, vl, vr): the tetrahedron case.
-    auto has_face_with_apexes = [&](Index v) {
-      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-        int hit = 0;
-        for (int k = 0; k < 3; ++k) hit += cur_[3 * *it + k] == vl || cur_[3 * *it + k] == vr;
-        if (hit == 2) return true;
-      }
-      return false;
-    };
-    if (has_face_with_apexes(a) && has_face_with_apexes(b)) return Verdict::kLink;
-  }
-  // No face turns over or collapses to zero area: the new normal keeps an angle under ~89.94 degrees with
-  // the current one (cached as a unit vector).
-  for (Index v : {a, b})
+  // One pass over the faces of a and b for the rest (a rejection is rare, so the pass runs to its end and
+  // the verdicts keep their order of precedence):
+  // - the tetrahedron case: faces (a, vl, vr) and (b, vr, vl) would both become (vs, vl, vr);
+  // - no face turns over or collapses to zero area: the new normal keeps an angle under ~89.94 degrees with
+  //   the current one (cached as a unit vector); the new normals are kept for collapse();
+  // - the node error increment (all faces, fl and fr included);
+  // - Hoppe's fn0..fn3, the faces across (b, vl), (vl, a), (a, vr), (vr, b): each holds a or b.
+  new_normal_.clear();
+  bool apexes[2] = {false, false}, flipped = false;
+  for (int side = 0; side < 2; ++side) {
+    const Index v = side == 0 ? a : b;
     for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
       const Index f = *it;
-      if (f == fl || f == fr) continue;
+      const Index c[3] = {cur_[3 * f], cur_[3 * f + 1], cur_[3 * f + 2]};
+      st.local = std::max(st.local, std::abs(glm::dot(fnormal_[f], p - geo_[c[0]].p)));
+      int hit = 0;
+      for (int k = 0; k < 3; ++k) {
+        hit += c[k] == vl || c[k] == vr;
+        const Index x = c[k], y = c[(k + 1) % 3];
+        if (side == 0) {
+          if (x == a && y == vl) st.fn[1] = f;
+          if (x == vr && y == a) st.fn[2] = f;
+        } else {
+          if (x == vl && y == b) st.fn[0] = f;
+          if (x == b && y == vr) st.fn[3] = f;
+        }
+      }
+      if (hit == 2 && vl != kInvalid && vr != kInvalid) apexes[side] = true;
+      if (f == fl || f == fr || flipped) continue;
       const glm::dvec3& n0 = fnormal_[f];
       const glm::dvec3 n1 = face_normal(f, v, p);
+      new_normal_.push_back(n1);
       const double l1 = glm::dot(n1, n1);
       if (n0 == glm::dvec3(0.0)) {
-        if (l1 == 0.0) return Verdict::kFlip;
+        flipped = l1 == 0.0;
         continue;
       }
-      if (!(glm::dot(n0, n1) > 1e-3 * std::sqrt(l1))) return Verdict::kFlip;
+      flipped = !(glm::dot(n0, n1) > 1e-3 * std::sqrt(l1));
     }
+  }
+  if (apexes[0] && apexes[1]) return Verdict::kLink;
+  if (flipped) return Verdict::kFlip;
   return Verdict::kOk;
 }
 
-void Analysis::collapse(Index a, Index b, const Placement& pl, Index fl, Index fr, double local) {
-  const Index vs = static_cast<Index>(upos_.size());
+void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
+  // vs takes a's slot; its node id is the next one.
+  const Index vs = a;
+  const Index na = node_of_[a], nb = node_of_[b];
+  const Index fl = st.fl, fr = st.fr, vl = st.vl, vr = st.vr;
   // Kim-Lee orientation: fl = (vt, vu, vl) holds vt->vu. Our fl holds a->b, so vt = a, vu = b.
   CollapseRecord rec;
-  rec.vt = a;
-  rec.vu = b;
-  auto apex_corner = [&](Index f) {
-    for (int k = 0; k < 3; ++k)
-      if (cur_[3 * f + k] != a && cur_[3 * f + k] != b) return k;
-    return -1;
-  };
-  // Face across directed edge (x -> y): the live face holding y -> x.
-  auto across = [&](Index x, Index y) {
-    for (const Index* it = faces_begin(x); it != faces_end(x); ++it)
-      for (int k = 0; k < 3; ++k)
-        if (cur_[3 * *it + k] == y && cur_[3 * *it + (k + 1) % 3] == x) return *it;
-    return kInvalid;
-  };
-  Index vl = kInvalid, vr = kInvalid;
+  rec.vt = na;
+  rec.vu = nb;
   if (fl != kInvalid) {
-    const int k = apex_corner(fl);
-    vl = cur_[3 * fl + k];
-    rec.vl_hat = in_.faces[3 * fl + k];
+    rec.vl_hat = in_.faces[3 * fl + st.kl];
     rec.fl_hat = fl;
-    rec.fn[0] = across(b, vl);
-    rec.fn[1] = across(vl, a);
   }
   if (fr != kInvalid) {
-    const int k = apex_corner(fr);
-    vr = cur_[3 * fr + k];
-    rec.vr_hat = in_.faces[3 * fr + k];
+    rec.vr_hat = in_.faces[3 * fr + st.kr];
     rec.fr_hat = fr;
-    rec.fn[2] = across(a, vr);
-    rec.fn[3] = across(vr, b);
   }
+  rec.fn = st.fn;
   // Error: accumulated largest distance from vs to the planes of the faces it replaces.
-  const double err = std::max(uerr_[a], uerr_[b]) + local;
+  const double err = std::max(uerr_[a], uerr_[b]) + st.local;
 
-  // The new node.
-  upos_.push_back(pl.p);
+  // The new node, in a's slot (mark_[a] holds an old stamp: no reset needed).
+  node_of_[vs] = static_cast<Index>(raw_.positions.size());
+  geo_[vs].p = pl.p;
   if (colors_) {
-    ucol_.push_back(pl.color);
-    aq_.push_back(aq_[a] + aq_[b]);
+    ucol_[vs] = pl.color;
+    aq_[vs] += aq_[b];
   } else {
-    q_.push_back(q_[a] + q_[b]);
+    geo_[vs].q += geo_[b].q;
   }
-  node_alive_[a] = node_alive_[b] = 0;
-  node_alive_.push_back(1);
-  border_.push_back(border_[a] | border_[b]);
-  rejected_.push_back(0);
-  height_.push_back(static_cast<std::uint16_t>(std::max(height_[a], height_[b]) + 1));
-  uerr_.push_back(err);
-  mark_.push_back(0);
-  link_.push_back(kInvalid);
+  node_alive_[b] = 0;
+  border_[vs] |= border_[b];
+  rejected_[vs] = 0;
+  height_[vs] = static_cast<std::uint16_t>(std::max(height_[a], height_[b]) + 1);
+  uerr_[vs] = err;
+  link_[vs] = kInvalid;
   --alive_vertices_;
 
   // Faces: fl and fr die, the others of a and b move to vs (in that order: the ring order follows it).
@@ -289,23 +326,24 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, Index fl, Index f
   if (fr != kInvalid) alive_[fr] = 0;
   alive_faces_ -= (fl != kInvalid) + (fr != kInvalid);
   const Index foff = static_cast<Index>(fpool_.size());
-  NormalCone cone = enclose(raw_.bounds[a].cone, raw_.bounds[b].cone);
+  NormalCone cone = enclose(raw_.bounds[na].cone, raw_.bounds[nb].cone);
+  const glm::dvec3* n1 = new_normal_.data();  // check()'s new normals, in this order
   for (Index v : {a, b})
     for (Index i = fadj_[v].off, end = i + fadj_[v].cnt; i < end; ++i) {
       const Index f = fpool_[i];  // by index: the push_back below may move the pool
       if (f == fl || f == fr) continue;
-      for (int k = 0; k < 3; ++k)
-        if (cur_[3 * f + k] == v) cur_[3 * f + k] = vs;
+      if (v == b)
+        for (int k = 0; k < 3; ++k)
+          if (cur_[3 * f + k] == b) cur_[3 * f + k] = vs;
       fpool_.push_back(f);
-      update_normal(f);
+      const double len = glm::length(*n1);  // as update_normal() on the relabelled face
+      fnormal_[f] = len > 0.0 ? *n1 / len : glm::dvec3(0.0);
+      ++n1;
       const glm::dvec3& n = fnormal_[f];
       if (n == glm::dvec3(0.0) || cone.is_full()) continue;
-      // A normal already inside the cone leaves it unchanged (enclose() would return it): skip its acos.
-      const glm::vec3 nf(n);
-      if (glm::dot(cone.axis, nf) >= cone.cos_half_angle) continue;
-      cone = enclose(cone, NormalCone{nf, 1.0f});
+      cone = enclose_normal(cone, glm::vec3(n));
     }
-  fadj_.push_back({foff, static_cast<Index>(fpool_.size()) - foff});
+  fadj_[vs] = {foff, static_cast<Index>(fpool_.size()) - foff};
   for (Index x : {vl, vr}) {
     if (x == kInvalid) continue;
     Index* it = fpool_.data() + fadj_[x].off;
@@ -323,8 +361,8 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, Index fl, Index f
       mark_[w] = stamp_;
       link_[w] = kInvalid;
       ring_.push_back(w);
+      raw_.ring_items.push_back(node_of_[w]);
     }
-  raw_.ring_items.insert(raw_.ring_items.end(), ring_.begin(), ring_.end());
   raw_.ring_offsets.push_back(static_cast<Index>(raw_.ring_items.size()));
 
   // Candidate edges: the edge of each neighbour w of vs to a (or b) becomes the edge (vs, w), keeping its
@@ -357,17 +395,17 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, Index fl, Index f
         *pos = run[--eadj_[w].cnt];  // its slot stays unused
       }
     }
-  eadj_.push_back({static_cast<Index>(epool_.size()), static_cast<Index>(new_edges_.size())});
+  eadj_[vs] = {static_cast<Index>(epool_.size()), static_cast<Index>(new_edges_.size())};
   epool_.insert(epool_.end(), new_edges_.begin(), new_edges_.end());
 
   ElementBound bound;
-  Sphere s = enclose(Sphere{raw_.bounds[a].center, raw_.bounds[a].radius}, Sphere{raw_.bounds[b].center, raw_.bounds[b].radius});
+  Sphere s = enclose(Sphere{raw_.bounds[na].center, raw_.bounds[na].radius}, Sphere{raw_.bounds[nb].center, raw_.bounds[nb].radius});
   s = enclose(s, Sphere{to_object(pl.p), 0.0f});
   bound.center = s.center;
   bound.radius = s.radius;
   bound.cone = cone;
   bound.error = static_cast<float>(err * scale_);
-  bound.error = std::max({bound.error, raw_.bounds[a].error, raw_.bounds[b].error});
+  bound.error = std::max({bound.error, raw_.bounds[na].error, raw_.bounds[nb].error});
   raw_.bounds.push_back(bound);
   raw_.positions.push_back(to_object(pl.p));
   if (colors_) raw_.colors.push_back(glm::vec3(pl.color / (opt_.color_weight > 0 ? opt_.color_weight : 1.0)));
@@ -455,42 +493,30 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   scale_ = std::max(1e-30, static_cast<double>(box.diagonal()));
   colors_ = opt_.use_colors && !in_.colors.empty();
 
-  // Per-node arrays hold at most 2 nl - 1 nodes.
+  // The hierarchy holds at most 2 nl - 1 nodes; the working state nl slots.
   const std::size_t max_nodes = 2 * nl_;
-  upos_.reserve(max_nodes);
-  upos_.resize(nl_);
-  for (std::size_t v = 0; v < nl_; ++v) upos_[v] = to_unit(in_.positions[v]);
+  node_of_.resize(nl_);
+  std::iota(node_of_.begin(), node_of_.end(), Index{0});
+  geo_.assign(nl_, Geo{});
+  for (std::size_t v = 0; v < nl_; ++v) geo_[v].p = to_unit(in_.positions[v]);
   cur_ = in_.faces;
   alive_.assign(nf_, 1);
   alive_faces_ = nf_;
-  node_alive_.reserve(max_nodes);
   node_alive_.assign(nl_, 1);
   alive_vertices_ = nl_;
-  border_.reserve(max_nodes);
   border_.assign(nl_, 0);
-  rejected_.reserve(max_nodes);
   rejected_.assign(nl_, 0);
-  height_.reserve(max_nodes);
+  locked_ = in_.locked;
   height_.assign(nl_, 0);
-  uerr_.reserve(max_nodes);
   uerr_.assign(nl_, 0.0);
-  mark_.reserve(max_nodes);
   mark_.assign(nl_, 0);
-  link_.reserve(max_nodes);
   link_.assign(nl_, kInvalid);
-  fadj_.reserve(max_nodes);
-  eadj_.reserve(max_nodes);
 
   // Quadrics: area-weighted face planes plus border constraints (GH97).
   if (colors_) {
-    aq_.reserve(max_nodes);
     aq_.assign(nl_, AttributeQuadric{});
-    ucol_.reserve(max_nodes);
     ucol_.resize(nl_);
     for (std::size_t v = 0; v < nl_; ++v) ucol_[v] = glm::dvec3(in_.colors[v]) * opt_.color_weight;
-  } else {
-    q_.reserve(max_nodes);
-    q_.assign(nl_, Quadric{});
   }
   init_faces();
   // Directed edge x -> y exists when a face of x holds it: scan x's faces (cache-friendly, O(degree)).
@@ -505,21 +531,21 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   for (std::size_t f = 0; f < nf_; ++f) {
     const Index c0 = cur_[3 * f], c1 = cur_[3 * f + 1], c2 = cur_[3 * f + 2];
     if (colors_) {
-      const AttributeQuadric q = AttributeQuadric::from_triangle({upos_[c0], ucol_[c0]}, {upos_[c1], ucol_[c1]}, {upos_[c2], ucol_[c2]});
+      const AttributeQuadric q = AttributeQuadric::from_triangle({geo_[c0].p, ucol_[c0]}, {geo_[c1].p, ucol_[c1]}, {geo_[c2].p, ucol_[c2]});
       aq_[c0] += q;
       aq_[c1] += q;
       aq_[c2] += q;
     } else {
-      const Quadric q = Quadric::from_triangle(upos_[c0], upos_[c1], upos_[c2]);
-      q_[c0] += q;
-      q_[c1] += q;
-      q_[c2] += q;
+      const Quadric q = Quadric::from_triangle(geo_[c0].p, geo_[c1].p, geo_[c2].p);
+      geo_[c0].q += q;
+      geo_[c1].q += q;
+      geo_[c2].q += q;
     }
     for (int k = 0; k < 3; ++k) {
       const Index x = cur_[3 * f + k], y = cur_[3 * f + (k + 1) % 3], z = cur_[3 * f + (k + 2) % 3];
       if (has_edge(y, x)) continue;
       border_[x] = border_[y] = 1;
-      const Quadric bq = Quadric::from_border_edge(upos_[x], upos_[y], upos_[z], opt_.border_penalty);
+      const Quadric bq = Quadric::from_border_edge(geo_[x].p, geo_[y].p, geo_[z].p, opt_.border_penalty);
       if (colors_) {
         // Border planes constrain position only: embed the 3x3 part in the 6x6 quadric.
         AttributeQuadric aq;
@@ -532,8 +558,8 @@ VertexHierarchy Analysis::run(QemStats& stats) {
         aq_[x] += aq;
         aq_[y] += aq;
       } else {
-        q_[x] += bq;
-        q_[y] += bq;
+        geo_[x].q += bq;
+        geo_[y].q += bq;
       }
     }
   }
@@ -565,7 +591,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
         radius[v] = std::max({radius[v], glm::length(p0 - pv), glm::length(p1 - pv), glm::length(p2 - pv)});
         if (len > 0.0f) {
           const NormalCone c{n / len, 1.0f};
-          cone[v] = has_cone[v] ? enclose(cone[v], c) : c;
+          cone[v] = has_cone[v] ? enclose_normal(cone[v], c.axis) : c;
           has_cone[v] = 1;
         }
       }
@@ -580,6 +606,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     return (target_v > 0 && alive_vertices_ <= target_v) || (target_f > 0 && alive_faces_ <= target_f);
   };
   std::size_t since_rebuild = 0;
+  Step step;
   while (!done()) {
     if (heap_.empty()) {
       if (since_rebuild == 0) break;
@@ -596,13 +623,11 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     heap_.pop();
     const Index a = edges_[e].a, b = edges_[e].b;
     const Placement pl = place(a, b);
-    Index fl, fr;
-    const Verdict verdict = check(a, b, pl.p, fl, fr);
+    const Verdict verdict = check(a, b, pl.p, step);
     if (verdict == Verdict::kOk) {
-      const double local = local_error(a, b, pl.p);
       // Stop before the first collapse whose recorded error would exceed the limit.
-      if (std::isfinite(opt_.max_error) && (std::max(uerr_[a], uerr_[b]) + local) * scale_ > opt_.max_error) break;
-      collapse(a, b, pl, fl, fr, local);
+      if (std::isfinite(opt_.max_error) && (std::max(uerr_[a], uerr_[b]) + step.local) * scale_ > opt_.max_error) break;
+      collapse(a, b, pl, step);
       ++stats.collapses;
       ++since_rebuild;
       if (opt_.progress && (stats.collapses & 4095u) == 0) opt_.progress(stats.collapses, alive_vertices_);

@@ -5,9 +5,14 @@
 /// total order when tie keys are distinct, so the pop sequence does not depend on insertion order. The heap
 /// keeps each id's position, so an edge that dies is erased at once (mostly near the leaves, hence cheap)
 /// instead of lingering as a stale entry that a later pop must sift through the whole depth of the heap.
-/// 4-ary: a node's four children share one 64-byte line (16-byte entries), halving the depth of a sift-down.
-/// Invariant (checked by validate()): pos_[heap_[i].id] == i for every i, and no entry is less than its parent.
+/// An entry is 8 bytes: the cost rounded to float and the id. Rounding is monotone, so unequal float keys
+/// order like the double costs; equal keys fall back to the exact (cost, tie) kept per id, and the order is
+/// the same as on (double cost, tie). kArity children share one 64-byte line (the array is offset so that
+/// the first child of every node starts a line).
+/// Invariant (checked by validate()): pos_[h_[i].id] == i for every i, and no entry is less than its parent.
+#include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "multitri/types.hpp"
@@ -16,37 +21,47 @@ namespace varmesh::detail {
 
 class EdgeHeap {
  public:
-  /// Ids must be < the largest value ever given to grow_ids().
+  static constexpr std::size_t kArity = 8;
+
+  EdgeHeap() = default;
+  EdgeHeap(const EdgeHeap&) = delete;  // h_ points into store_
+  EdgeHeap& operator=(const EdgeHeap&) = delete;
+
+  /// Ids must be < the largest value ever given to grow_ids(); the heap holds at most that many entries.
   void grow_ids(std::size_t n) {
     if (pos_.size() < n) {
       pos_.resize(n, kInvalid);
+      cost_.resize(n, 0.0);
       tie_.resize(n, 0);
     }
+    if (cap_ < n) grow(n);
   }
-  bool empty() const noexcept { return heap_.empty(); }
-  std::size_t size() const noexcept { return heap_.size(); }
+  bool empty() const noexcept { return size_ == 0; }
+  std::size_t size() const noexcept { return size_; }
   bool contains(Index id) const noexcept { return pos_[id] != kInvalid; }
   /// Cache hint before erase(id) or contains(id).
   void prefetch(Index id) const noexcept { __builtin_prefetch(pos_.data() + id); }
-  Index top() const noexcept { return heap_[0].id; }
-  double top_cost() const noexcept { return heap_[0].cost; }
+  Index top() const noexcept { return h_[0].id; }
+  double top_cost() const noexcept { return cost_[h_[0].id]; }
 
   /// Adds an id that is not in the heap. O(log n).
   void push(Index id, double cost, std::uint64_t tie) {
-    tie_[id] = tie;
-    heap_.push_back({cost, id});
-    sift_up(heap_.size() - 1);
+    set_key(id, cost, tie);
+    if (size_ == cap_) grow(2 * cap_ + 64);
+    h_[size_] = {static_cast<float>(cost), id};
+    sift_up(size_++);
   }
   /// Appends without ordering; call heapify() before any other operation. O(1).
   void push_unordered(Index id, double cost, std::uint64_t tie) {
-    tie_[id] = tie;
-    pos_[id] = static_cast<Index>(heap_.size());
-    heap_.push_back({cost, id});
+    set_key(id, cost, tie);
+    if (size_ == cap_) grow(2 * cap_ + 64);
+    pos_[id] = static_cast<Index>(size_);
+    h_[size_++] = {static_cast<float>(cost), id};
   }
   /// Floyd's bottom-up construction. O(n).
   void heapify() {
-    if (heap_.size() < 2) return;
-    for (std::size_t i = (heap_.size() - 2) / 4 + 1; i-- > 0;) sift_down(i);
+    if (size_ < 2) return;
+    for (std::size_t i = (size_ - 2) / kArity + 1; i-- > 0;) sift_down(i);
   }
   /// Changes the key of `id`, or adds it if absent. Cheaper than erase() then push(): one sift from where
   /// the entry already is. O(log n).
@@ -55,10 +70,10 @@ class EdgeHeap {
       push(id, cost, tie);
       return;
     }
-    tie_[id] = tie;
+    set_key(id, cost, tie);
     const std::size_t i = pos_[id];
-    heap_[i].cost = cost;
-    if (i > 0 && less(heap_[i], heap_[(i - 1) / 4])) sift_up(i); else sift_down(i);
+    h_[i].key = static_cast<float>(cost);
+    if (i > 0 && less(h_[i], h_[(i - 1) / kArity])) sift_up(i); else sift_down(i);
   }
   void pop() { erase_at(0); }
   /// Removes `id` if present. O(log n), O(1) expected for a random entry.
@@ -66,66 +81,87 @@ class EdgeHeap {
     if (pos_[id] != kInvalid) erase_at(pos_[id]);
   }
   void clear() {
-    for (const Entry& e : heap_) pos_[e.id] = kInvalid;
-    heap_.clear();
+    for (std::size_t i = 0; i < size_; ++i) pos_[h_[i].id] = kInvalid;
+    size_ = 0;
   }
   bool validate() const {
-    for (std::size_t i = 0; i < heap_.size(); ++i) {
-      if (pos_[heap_[i].id] != i) return false;
-      if (i > 0 && less(heap_[i], heap_[(i - 1) / 4])) return false;
+    for (std::size_t i = 0; i < size_; ++i) {
+      if (pos_[h_[i].id] != i) return false;
+      if (h_[i].key != static_cast<float>(cost_[h_[i].id])) return false;
+      if (i > 0 && less(h_[i], h_[(i - 1) / kArity])) return false;
     }
     return true;
   }
 
  private:
   struct Entry {
-    double cost;
+    float key;  // cost rounded to float
     Index id;
   };
+  void set_key(Index id, double cost, std::uint64_t tie) {
+    cost_[id] = cost;
+    tie_[id] = tie;
+  }
   bool less(const Entry& x, const Entry& y) const noexcept {
-    return x.cost < y.cost || (x.cost == y.cost && tie_[x.id] < tie_[y.id]);
+    if (x.key != y.key) return x.key < y.key;
+    const double cx = cost_[x.id], cy = cost_[y.id];
+    return cx < cy || (cx == cy && tie_[x.id] < tie_[y.id]);
   }
   void place(std::size_t i, const Entry& e) {
-    heap_[i] = e;
+    h_[i] = e;
     pos_[e.id] = static_cast<Index>(i);
   }
   void sift_up(std::size_t i) {
-    const Entry e = heap_[i];
+    const Entry e = h_[i];
     while (i > 0) {
-      const std::size_t p = (i - 1) / 4;
-      if (!less(e, heap_[p])) break;
-      place(i, heap_[p]);
+      const std::size_t p = (i - 1) / kArity;
+      if (!less(e, h_[p])) break;
+      place(i, h_[p]);
       i = p;
     }
     place(i, e);
   }
   void sift_down(std::size_t i) {
-    const Entry e = heap_[i];
-    const std::size_t n = heap_.size();
+    const Entry e = h_[i];
+    const std::size_t n = size_;
     for (;;) {
-      const std::size_t c0 = 4 * i + 1;
+      const std::size_t c0 = kArity * i + 1;
       if (c0 >= n) break;
       std::size_t best = c0;
-      const std::size_t end = c0 + 4 < n ? c0 + 4 : n;
+      const std::size_t end = c0 + kArity < n ? c0 + kArity : n;
       for (std::size_t c = c0 + 1; c < end; ++c)
-        if (less(heap_[c], heap_[best])) best = c;
-      if (!less(heap_[best], e)) break;
-      place(i, heap_[best]);
+        if (less(h_[c], h_[best])) best = c;
+      if (!less(h_[best], e)) break;
+      place(i, h_[best]);
       i = best;
     }
     place(i, e);
   }
   void erase_at(std::size_t i) {
-    pos_[heap_[i].id] = kInvalid;
-    const Entry last = heap_.back();
-    heap_.pop_back();
-    if (i == heap_.size()) return;
-    heap_[i] = last;
-    if (i > 0 && less(last, heap_[(i - 1) / 4])) sift_up(i); else sift_down(i);
+    pos_[h_[i].id] = kInvalid;
+    const Entry last = h_[--size_];
+    if (i == size_) return;
+    h_[i] = last;
+    if (i > 0 && less(last, h_[(i - 1) / kArity])) sift_up(i); else sift_down(i);
+  }
+  // New storage with room for n entries, h_ placed so that h_ + 1 starts a 64-byte line (then so does the
+  // first child kArity i + 1 of every node i).
+  void grow(std::size_t n) {
+    std::vector<Entry> s(n + 64 / sizeof(Entry));
+    const auto addr = reinterpret_cast<std::uintptr_t>(s.data() + 1);
+    const std::size_t off = ((64 - addr % 64) % 64) / sizeof(Entry);
+    Entry* h = s.data() + off;
+    for (std::size_t i = 0; i < size_; ++i) h[i] = h_[i];
+    store_ = std::move(s);
+    h_ = h;
+    cap_ = n;
   }
 
-  std::vector<Entry> heap_;
-  std::vector<Index> pos_;          // per id: index in heap_, kInvalid when absent
+  std::vector<Entry> store_;
+  Entry* h_ = nullptr;
+  std::size_t size_ = 0, cap_ = 0;
+  std::vector<Index> pos_;          // per id: index in h_, kInvalid when absent
+  std::vector<double> cost_;        // per id
   std::vector<std::uint64_t> tie_;  // per id
 };
 

@@ -10,12 +10,62 @@
 
 #include <algorithm>
 #include <bit>
+#include <new>
 #include <stdexcept>
 #include <string>
+
+// Sanitizers see through operator new only: under ASan (gcc: __SANITIZE_ADDRESS__; clang: __has_feature)
+// the big arrays stay on the heap so that out-of-bounds accesses are still caught.
+#if defined(__SANITIZE_ADDRESS__)
+#define VARMESH_SR_NO_HUGE_PAGES 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define VARMESH_SR_NO_HUGE_PAGES 1
+#endif
+#endif
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "multitri/errors.hpp"
 
 namespace varmesh {
+
+namespace detail {
+
+// An operation touches some twenty scattered cache lines of these arrays; with 4 KiB pages nearly each is
+// also a TLB miss on a mesh of 10^5-10^6 faces, with 2 MiB pages the arrays' translations fit in the TLB.
+void* sr_allocate(std::size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(VARMESH_SR_NO_HUGE_PAGES)
+  constexpr std::size_t kHuge = std::size_t{2} << 20;
+  if (bytes >= kHuge) {
+    // Map 2 MiB more and trim, so that the block starts on a huge-page boundary; munmap(p, bytes) frees it.
+    void* m = mmap(nullptr, bytes + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (m == MAP_FAILED) throw std::bad_alloc();
+    const auto at = reinterpret_cast<std::uintptr_t>(m);
+    const std::uintptr_t start = (at + kHuge - 1) & ~(std::uintptr_t{kHuge} - 1);
+    const std::uintptr_t end = start + bytes, map_end = at + bytes + kHuge;
+    const std::uintptr_t page_end = (end + 4095) & ~std::uintptr_t{4095};
+    if (start > at) munmap(m, start - at);
+    if (map_end > page_end) munmap(reinterpret_cast<void*>(page_end), map_end - page_end);
+    madvise(reinterpret_cast<void*>(start), bytes, MADV_HUGEPAGE);
+    return reinterpret_cast<void*>(start);
+  }
+#endif
+  return ::operator new(bytes);
+}
+
+void sr_deallocate(void* p, std::size_t bytes) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(VARMESH_SR_NO_HUGE_PAGES)
+  if (bytes >= (std::size_t{2} << 20)) {
+    munmap(p, bytes);
+    return;
+  }
+#endif
+  ::operator delete(p);
+}
+
+}  // namespace detail
 
 const char* scheme_name(RefinementScheme s) noexcept {
   switch (s) {
@@ -32,6 +82,10 @@ constexpr int kXvMaxDepth = 200;
 // stamps; shorter ones (nearly all: valence ~6) compare in registers and test the section 4.3 keys.
 constexpr std::size_t kLongRing = 32;
 constexpr std::size_t kRingStart = 64;
+// Look-ahead of refine_all/coarsen_all: stages and operations between stages.
+constexpr int kLookStages = 4;
+constexpr int kLookGap = 4;
+
 }  // namespace
 
 SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), scheme_(scheme) {
@@ -39,17 +93,40 @@ SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), sche
   if (h.num_faces() >= (std::size_t{1} << 30))
     throw InvalidInput("SrMesh: " + std::to_string(h.num_faces()) + " faces exceed the 2^30 - 1 supported");
   num_slots_ = static_cast<Index>(h.num_faces());
-  faces_.resize(num_slots_);
-  nodes_.resize(h.num_nodes());
-  state_.assign(h.num_nodes(), 0);
+  faces_.assign(num_slots_, {});
+  nodes_.assign(h.num_nodes(), {});
+  state_.assign(h.num_nodes(), std::uint8_t{0});
   mark_.assign(h.num_nodes(), 0);
   in_progress_.assign(h.num_nodes(), 0);
   vu_of_vt_.assign(h.num_nodes(), kInvalid);
-  keys_.resize(h.num_nodes());
+  keys_.assign(h.num_nodes(), {});
   for (std::size_t v = 0; v < h.num_nodes(); ++v) keys_[v] = h.key(static_cast<Index>(v)).value;
   for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
     const CollapseRecord& r = h.record(static_cast<Index>(v));
     vu_of_vt_[r.vt] = r.vu;
+  }
+  // Slots in vsplit order (see faces_); every face is a base face or created by exactly one collapse.
+  slot_of_.assign(num_slots_, kInvalid);
+  face_of_.assign(num_slots_, kInvalid);
+  Index next = 0;
+  auto place = [&](Index f) {
+    if (f == kInvalid) return;
+    slot_of_[f] = next;
+    face_of_[next++] = f;
+  };
+  for (Index f : h.base_faces()) place(f);
+  for (std::size_t v = h.num_nodes(); v-- > h.num_leaves();) {
+    const CollapseRecord& r = h.record(static_cast<Index>(v));
+    place(r.fl_hat);
+    place(r.fr_hat);
+  }
+  if (next != num_slots_) throw std::logic_error("SrMesh: faces neither in the base mesh nor created by a collapse");
+  splits_.assign(h.num_collapses(), {});
+  for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
+    const CollapseRecord& r = h.record(static_cast<Index>(v));
+    const auto slot = [&](Index f) { return f == kInvalid ? kInvalid : slot_of_[f]; };
+    const auto key = [&](Index leaf) { return leaf == kInvalid ? std::uint64_t{0} : keys_[leaf]; };
+    splits_[v - h.num_leaves()] = Split{r.vt, r.vu, slot(r.fl_hat), slot(r.fr_hat), key(r.vl_hat), key(r.vr_hat)};
   }
   active_list_.reserve(h.num_leaves());
   for (Ring* ring : {&ring_, &ring2_}) ring->buf.resize(2 * kRingStart);
@@ -66,8 +143,9 @@ void SrMesh::build_base() {
     top[v] = p == kInvalid ? static_cast<Index>(v) : top[p];
   }
   std::vector<std::pair<std::uint64_t, Index>> edges;
-  for (Index f : h_->base_faces()) {
-    const auto c = h_->face(f);
+  for (Index face : h_->base_faces()) {
+    const auto c = h_->face(face);
+    const Index f = slot_of_[face];
     FaceSlot fs{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}};
     for (int k = 0; k < 3; ++k) fs.v[static_cast<std::size_t>(k)] = top[c[static_cast<std::size_t>(k)]];
     faces_[f] = fs;
@@ -81,7 +159,7 @@ void SrMesh::build_base() {
     if (it != edges.end() && it->first == twin) faces_[h >> 2].twin[h & 3] = it->second;
   }
   base_slots_.clear();
-  for (Index f : h_->base_faces()) base_slots_.push_back({f, faces_[f]});
+  for (Index f : h_->base_faces()) base_slots_.push_back({slot_of_[f], faces_[slot_of_[f]]});
   std::vector<Index> corner(h_->num_nodes(), kInvalid);
   for (const auto& [f, fs] : base_slots_)
     for (int k = 0; k < 3; ++k) corner[fs.v[static_cast<std::size_t>(k)]] = he(f, k);
@@ -190,7 +268,7 @@ Index SrMesh::active_ancestor(Index leaf) const noexcept {
 void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
   // ring_ holds the 1-ring of vs, pl/pr the places of vl/vr among its neighbours (-1 when absent).
   ecn_for_ = kInvalid;
-  const CollapseRecord& r = h_->record(vs);
+  const Split& r = split_of(vs);
   const Ring& ring = ring_;
   const int m = static_cast<int>(ring.size());
   const Index* hs = ring.buf.data() + ring.lo;
@@ -222,7 +300,7 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
   };
   // The half-edge of ring face `h` that enters the centre: its previous corner's.
   auto entering = [](Index h) { return (h & ~Index{3}) | prev_corner(h & 3); };
-  const Index fl = r.fl_hat, fr = r.fr_hat;
+  const Index fl = r.fl, fr = r.fr;
   if (fl != kInvalid) {
     FaceSlot& f = faces_[fl];
     f.v = {r.vt, r.vu, vl};
@@ -268,7 +346,7 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
 void SrMesh::do_ecol(Index vs) {
   // ring_ and ring2_ hold the 1-rings of vt and vu (left there by extra_common_neighbors).
   ecn_for_ = kInvalid;
-  const CollapseRecord& r = h_->record(vs);
+  const Split& r = split_of(vs);
   for (Index v : {vs, r.vt, r.vu}) prefetch_line(&nodes_[v]);
   prefetch_line(&nodes_[active_list_.back()]);
   if (active_list_.size() > 1) prefetch_line(&nodes_[active_list_[active_list_.size() - 2]]);
@@ -293,10 +371,10 @@ void SrMesh::do_ecol(Index vs) {
     fs = FaceSlot{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}};
     --num_faces_;
   };
-  const Index vl = r.fl_hat != kInvalid ? faces_[r.fl_hat].v[2] : kInvalid;
-  const Index vr = r.fr_hat != kInvalid ? faces_[r.fr_hat].v[2] : kInvalid;
-  kill(r.fl_hat, vl);
-  kill(r.fr_hat, vr);
+  const Index vl = r.fl != kInvalid ? faces_[r.fl].v[2] : kInvalid;
+  const Index vr = r.fr != kInvalid ? faces_[r.fr].v[2] : kInvalid;
+  kill(r.fl, vl);
+  kill(r.fr, vr);
   if (keep == kInvalid) throw std::logic_error("SrMesh: ecol of node " + std::to_string(vs) + " leaves it without a face");
   nodes_[vs].corner = keep;
   nodes_[r.vt].corner = nodes_[r.vu].corner = kInvalid;
@@ -321,13 +399,13 @@ bool SrMesh::extra_common_neighbors(Index vs) const {
 }
 
 bool SrMesh::extra_common_neighbors_walk(Index vs) const {
-  const CollapseRecord& r = h_->record(vs);
-  if (r.fl_hat != kInvalid) prefetch_line(&faces_[r.fl_hat]);
-  if (r.fr_hat != kInvalid) prefetch_line(&faces_[r.fr_hat]);
-  const Index vl = r.fl_hat != kInvalid ? faces_[r.fl_hat].v[2] : kInvalid;
-  const Index vr = r.fr_hat != kInvalid ? faces_[r.fr_hat].v[2] : kInvalid;
-  const Index f = r.fl_hat != kInvalid ? r.fl_hat : r.fr_hat;
-  const bool fl_side = r.fl_hat != kInvalid;
+  const Split& r = split_of(vs);
+  if (r.fl != kInvalid) prefetch_line(&faces_[r.fl]);
+  if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
+  const Index vl = r.fl != kInvalid ? faces_[r.fl].v[2] : kInvalid;
+  const Index vr = r.fr != kInvalid ? faces_[r.fr].v[2] : kInvalid;
+  const Index f = r.fl != kInvalid ? r.fl : r.fr;
+  const bool fl_side = r.fl != kInvalid;
   gather_rings(he(f, fl_side ? 0 : 1), ring_, he(f, fl_side ? 1 : 0), ring2_);
   const std::size_t nt = ring_.size() + (ring_.closed ? 0 : 1), nu = ring2_.size() + (ring2_.closed ? 0 : 1);
   auto candidate = [&](Index n) { return n != vl && n != vr && n != r.vt; };
@@ -364,7 +442,7 @@ bool SrMesh::xv_ring_matches(Index vs) const {
 
 bool SrMesh::can_ecol(Index vs) const {
   if (vs >= h_->num_nodes() || h_->is_leaf(vs) || state_[vs] != 2) return false;
-  const CollapseRecord& r = h_->record(vs);
+  const Split& r = split_of(vs);
   if (state_[r.vt] != 1 || state_[r.vu] != 1) return false;
   switch (scheme_) {
     case RefinementScheme::kKimLee: return !extra_common_neighbors(vs);
@@ -375,7 +453,7 @@ bool SrMesh::can_ecol(Index vs) const {
 }
 
 bool SrMesh::vsplit_kim_lee(Index vs) {
-  const CollapseRecord& r = h_->record(vs);
+  const Split& r = split_of(vs);
   const int bits = h_->node_bits();
   const std::uint64_t mask = bits >= 64 ? ~0ull : (1ull << bits) - 1ull;
   // Section 4.3's ancestor test against a fixed leaf, with the leaf's parts computed once.
@@ -383,8 +461,7 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
     std::uint64_t tree = 0, node = 0;
     int len = 0;
   };
-  auto leaf_of = [&](Index leaf) {
-    const std::uint64_t k = keys_[leaf];
+  auto leaf_of = [&](std::uint64_t k) {
     return Leaf{k >> bits, k & mask, static_cast<int>(std::bit_width(k & mask))};
   };
   auto is_ancestor = [&](std::uint64_t k, const Leaf& l) {
@@ -392,15 +469,15 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
     const int len = static_cast<int>(std::bit_width(n));
     return (k >> bits) == l.tree && len <= l.len && (l.node >> (l.len - len)) == n;
   };
-  const bool has_l = r.vl_hat != kInvalid, has_r = r.vr_hat != kInvalid;
+  const bool has_l = r.fl != kInvalid, has_r = r.fr != kInvalid;  // a cut vertex with each face
   // The split's scattered writes are known from the record alone: asking for their lines now overlaps
   // those cache misses with the ring walk instead of paying them one after another.
   prefetch_line(&nodes_[r.vt]);
   prefetch_line(&nodes_[r.vu]);
   prefetch_line(&nodes_[active_list_.back()]);
-  if (r.fl_hat != kInvalid) prefetch_line(&faces_[r.fl_hat]);
-  if (r.fr_hat != kInvalid) prefetch_line(&faces_[r.fr_hat]);
-  const Leaf kl = has_l ? leaf_of(r.vl_hat) : Leaf{}, kr = has_r ? leaf_of(r.vr_hat) : Leaf{};
+  if (r.fl != kInvalid) prefetch_line(&faces_[r.fl]);
+  if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
+  const Leaf kl = has_l ? leaf_of(r.kl) : Leaf{}, kr = has_r ? leaf_of(r.kr) : Leaf{};
   for (;;) {
     ecn_for_ = kInvalid;  // ring_ is overwritten
     gather_ring(nodes_[vs].corner, ring_, true);
@@ -420,7 +497,8 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
     } else {
       // A high-valence vertex (the coarse side of an adaptive mesh): the one active ancestor of each leaf
       // is found by walking up in O(depth) instead of testing every neighbour; then its place in the ring.
-      const Index al = has_l ? active_ancestor(r.vl_hat) : kInvalid, ar = has_r ? active_ancestor(r.vr_hat) : kInvalid;
+      const CollapseRecord& rec = h_->record(vs);
+      const Index al = has_l ? active_ancestor(rec.vl_hat) : kInvalid, ar = has_r ? active_ancestor(rec.vr_hat) : kInvalid;
       for (std::size_t i = 0; i < nn; ++i) {
         const Index n = ring_neighbor(ring_, i);
         if (n == al) vl = n, pl = static_cast<int>(i);
@@ -579,25 +657,92 @@ void SrMesh::refine_forced(Index e) {
   if (state_[e] == 1) vsplit(e);
 }
 
+void SrMesh::prefetch_fan(Index h, int steps, bool keys) const noexcept {
+  Index fwd = h, back = h;
+  for (int i = 0; i < steps; ++i) {
+    if (fwd != kInvalid) {
+      if (keys) prefetch_line(&keys_[head(fwd)]);
+      fwd = faces_[fwd >> 2].twin[prev_corner(fwd & 3)];
+    }
+    if (back != kInvalid) {
+      if (keys) prefetch_line(&keys_[head(back)]);
+      const Index t = faces_[back >> 2].twin[back & 3];
+      back = t == kInvalid ? kInvalid : (t & ~Index{3}) | next_corner(t & 3);
+    }
+  }
+  if (fwd != kInvalid) prefetch_line(&faces_[fwd >> 2]);
+  if (back != kInvalid) prefetch_line(&faces_[back >> 2]);
+}
+
+// Stage s of the look-ahead for the vsplit of vs (stage 0 first, kLookStages - 1 just before the split).
+void SrMesh::prefetch_vsplit(Index vs, int stage) const noexcept {
+  if (state_[vs] != 1) return;
+  const Index c = nodes_[vs].corner;
+  if (stage == 0) {
+    const Split& r = split_of(vs);
+    prefetch_line(&nodes_[r.vt]);
+    prefetch_line(&nodes_[r.vu]);
+    prefetch_line(&state_[r.vt]);
+  }
+  prefetch_fan(c, stage, stage + 1 == kLookStages);
+}
+
+void SrMesh::prefetch_ecol(Index vs, int stage) const noexcept {
+  const Split& r = split_of(vs);
+  if (stage == 0) {
+    prefetch_line(&state_[r.vt]);
+    prefetch_line(&state_[r.vu]);
+    prefetch_line(&nodes_[r.vt]);
+    prefetch_line(&nodes_[r.vu]);
+    if (r.fl != kInvalid) prefetch_line(&faces_[r.fl]);
+    if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
+    return;
+  }
+  if (state_[vs] != 2 || state_[r.vt] != 1 || state_[r.vu] != 1) return;
+  const Index f = r.fl != kInvalid ? r.fl : r.fr;
+  if (stage == 1) {
+    for (Index g : {r.fl, r.fr})
+      if (g != kInvalid && faces_[g].v[2] != kInvalid) prefetch_line(&nodes_[faces_[g].v[2]]);
+  }
+  prefetch_fan(he(f, 0), stage - 1, false);
+  prefetch_fan(he(f, 1), stage - 1, false);
+}
+
+// refine_all and coarsen_all know the operations to come: the nodes in order of ids. On a big mesh an
+// operation's cost is its chain of cache misses (a fan walk is a pointer chase), so while doing operation
+// i they walk the fans of the next ones a few faces further each time (kLookStages stages, kLookGap
+// operations apart): the operations themselves then find their faces in cache. The same operations are
+// done in the same order; the look-ahead only reads.
 std::size_t SrMesh::refine_all() {
   const std::size_t before = stats_.vsplits;
+  const std::size_t lo = h_->num_leaves();
   bool progress = true;
   while (progress) {
     progress = false;
-    for (std::size_t v = h_->num_nodes(); v-- > h_->num_leaves();)
+    for (std::size_t v = h_->num_nodes(); v-- > lo;) {
+      for (int s = 0; s < kLookStages; ++s) {
+        const std::size_t d = static_cast<std::size_t>((kLookStages - s) * kLookGap);
+        if (v >= lo + d) prefetch_vsplit(static_cast<Index>(v - d), s);
+      }
       if (state_[v] == 1 && vsplit(static_cast<Index>(v))) progress = true;
+    }
   }
   return stats_.vsplits - before;
 }
 
 std::size_t SrMesh::coarsen_all() {
   const std::size_t before = stats_.ecols;
+  const std::size_t n = h_->num_nodes();
   bool progress = true;
   while (progress) {
     progress = false;
-    for (std::size_t v = h_->num_leaves(); v < h_->num_nodes(); ++v) {
+    for (std::size_t v = h_->num_leaves(); v < n; ++v) {
+      for (int s = 0; s < kLookStages; ++s) {
+        const std::size_t d = static_cast<std::size_t>((kLookStages - s) * kLookGap);
+        if (v + d < n) prefetch_ecol(static_cast<Index>(v + d), s);
+      }
       const Index vs = static_cast<Index>(v);
-      const CollapseRecord& r = h_->record(vs);
+      const Split& r = split_of(vs);
       if (state_[vs] == 2 && state_[r.vt] == 1 && state_[r.vu] == 1 && ecol(vs)) progress = true;
     }
   }
@@ -637,11 +782,11 @@ void SrMesh::validate() const {
     const FaceSlot& fs = faces_[f];
     if (fs.v[0] == kInvalid) {
       if (fs.v[1] != kInvalid || fs.v[2] != kInvalid || fs.twin[0] != kInvalid || fs.twin[1] != kInvalid || fs.twin[2] != kInvalid)
-        fail("inactive face " + std::to_string(f) + " not cleared");
+        fail("inactive face " + std::to_string(face_of_[f]) + " not cleared");
       continue;
     }
     ++faces;
-    const std::string name = "face " + std::to_string(f);
+    const std::string name = "face " + std::to_string(face_of_[f]) + " (slot " + std::to_string(f) + ")";
     for (Index k = 0; k < 3; ++k) {
       const Index v = fs.v[k];
       if (v == kInvalid || v >= state_.size() || state_[v] != 1) fail(name + ": corner " + std::to_string(v) + " not active");
@@ -692,8 +837,8 @@ void SrMesh::validate() const {
 
 std::size_t SrMesh::memory_bytes() const noexcept {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  return sizeof(SrMesh) + bytes(faces_) + bytes(nodes_) + bytes(base_slots_) + bytes(base_corners_) + bytes(state_) +
-         bytes(keys_) + bytes(vu_of_vt_) + bytes(active_list_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
+  return sizeof(SrMesh) + bytes(faces_) + bytes(slot_of_) + bytes(face_of_) + bytes(splits_) + bytes(nodes_) +
+         bytes(base_slots_) + bytes(base_corners_) + bytes(state_) + bytes(keys_) + bytes(vu_of_vt_) + bytes(active_list_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
 }
 
 }  // namespace varmesh

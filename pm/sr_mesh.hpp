@@ -21,8 +21,10 @@
 /// Faces are original faces (see vertex_hierarchy.hpp): face f is active when its three corners have three
 /// distinct active ancestors, and then its corners are those ancestors. The mesh is stored as face slots
 /// (one per original face, 24 bytes: three corners and the three twin half-edges across its edges, a
-/// half-edge being 4 * face + corner) and one incident corner per active vertex, so every operation walks
-/// only 1-rings and a ring step is one load.
+/// half-edge being 4 * slot + corner) and one incident corner per active vertex, so every operation walks
+/// only 1-rings and a ring step is one load. Slots are the original faces in vsplit order (internal; the
+/// API speaks original face ids). The big arrays ask for transparent huge pages on Linux, and
+/// refine_all/coarsen_all walk the fans of the operations a few steps ahead (prefetches only).
 ///
 /// Query API note: update() may keep a few sibling pairs finer than extract() would, because a Kim-Lee ecol
 /// postponed by the degenerate case (section 4.4) is not retried until its neighbourhood changes; the answer
@@ -46,6 +48,25 @@
 namespace varmesh {
 
 enum class RefinementScheme : std::uint8_t { kKimLee, kHoppe97, kXiaVarshney };
+
+namespace detail {
+/// Memory for SrMesh's big arrays: blocks of 2 MiB and more are fresh anonymous mappings that ask for
+/// transparent huge pages before their first touch (Linux, THP in "madvise" mode); smaller ones and other
+/// systems use operator new. Fresh mappings matter: heap memory recycled from earlier buffers keeps its
+/// 4 KiB pages.
+void* sr_allocate(std::size_t bytes);
+void sr_deallocate(void* p, std::size_t bytes) noexcept;
+template <class T>
+struct SrAllocator {
+  using value_type = T;
+  SrAllocator() noexcept = default;
+  template <class U> SrAllocator(const SrAllocator<U>&) noexcept {}
+  T* allocate(std::size_t n) { return static_cast<T*>(sr_allocate(n * sizeof(T))); }
+  void deallocate(T* p, std::size_t n) noexcept { sr_deallocate(p, n * sizeof(T)); }
+  template <class U> bool operator==(const SrAllocator<U>&) const noexcept { return true; }
+};
+template <class T> using SrVector = std::vector<T, SrAllocator<T>>;
+}  // namespace detail
 const char* scheme_name(RefinementScheme s) noexcept;
 
 struct SrStats {
@@ -71,12 +92,12 @@ class SrMesh {
   bool is_active(Index v) const noexcept { return state_[v] == 1; }
   std::size_t num_active_vertices() const noexcept { return num_active_; }
   std::size_t num_faces() const noexcept { return num_faces_; }
-  bool face_active(Index f) const noexcept { return faces_[f].v[0] != kInvalid; }
-  std::array<Index, 3> face(Index f) const noexcept { return faces_[f].v; }
+  bool face_active(Index f) const noexcept { return faces_[slot_of_[f]].v[0] != kInvalid; }
+  std::array<Index, 3> face(Index f) const noexcept { return faces_[slot_of_[f]].v; }
   /// The face across edge k (corners k, k+1) of active face f; kInvalid on the border.
   Index neighbor(Index f, int k) const noexcept {
-    const Index t = faces_[f].twin[static_cast<std::size_t>(k)];
-    return t == kInvalid ? kInvalid : t >> 2;
+    const Index t = faces_[slot_of_[f]].twin[static_cast<std::size_t>(k)];
+    return t == kInvalid ? kInvalid : face_of_[t >> 2];
   }
 
   /// Splits active non-leaf vertex vs under the scheme's rule (forcing what it needs). Returns true when vs
@@ -95,9 +116,12 @@ class SrMesh {
 
   /// Active vertices (any order) and faces.
   std::vector<Index> active_vertices() const;
+  /// fn(face, a, b, c) for each active face, in increasing face id order.
   template <class Fn> void for_each_face(Fn&& fn) const {
-    for (Index f = 0; f < num_slots_; ++f)
-      if (faces_[f].v[0] != kInvalid) fn(f, faces_[f].v[0], faces_[f].v[1], faces_[f].v[2]);
+    for (Index f = 0; f < num_slots_; ++f) {
+      const FaceSlot& fs = faces_[slot_of_[f]];
+      if (fs.v[0] != kInvalid) fn(f, fs.v[0], fs.v[1], fs.v[2]);
+    }
   }
   /// The current mesh with compact vertex numbering; vertex_nodes (optional) receives node id per vertex.
   TriMesh to_mesh(std::vector<Index>* vertex_nodes = nullptr) const;
@@ -133,11 +157,11 @@ class SrMesh {
       }
   }
   template <class Fn> void for_each_child_candidate(Index e, Fn&& fn) const {
-    const CollapseRecord& r = h_->record(e);
+    const Split& r = split_of(e);
     for (Index c : {r.vt, r.vu})
       if (!h_->is_leaf(c)) {
         prefetch_line(&h_->bound(c));
-        prefetch_line(&h_->record(c));
+        prefetch_line(&split_of(c));
         fn(c);
       }
   }
@@ -171,6 +195,14 @@ class SrMesh {
     std::array<Index, 3> v;     // corners (active nodes); v[0] == kInvalid when the face is inactive
     std::array<Index, 3> twin;  // twin[k]: the half-edge across edge k, kInvalid on the border
   };
+  // What a vsplit/ecol of node vs reads, copied from its CollapseRecord: 32 bytes, one line, read in the
+  // order of node ids by refine_all/coarsen_all. fl/fr are face slots (kInvalid when absent); kl/kr the
+  // section 4.3 keys of the fundamental cut vertices vl^, vr^ (which would otherwise be two scattered loads).
+  struct Split {
+    Index vt, vu, fl, fr;
+    std::uint64_t kl, kr;
+  };
+  const Split& split_of(Index vs) const noexcept { return splits_[vs - h_->num_leaves()]; }
   struct NodeSlot {
     Index corner = kInvalid;      // a half-edge starting at this active vertex
     Index active_pos = kInvalid;  // place in active_list_, kInvalid when not active
@@ -202,6 +234,11 @@ class SrMesh {
     return i < ring.size() ? head(ring[i]) : third(ring[ring.size() - 1]);
   }
 
+  // Look-ahead for refine_all/coarsen_all: touch the fan around half-edge h `steps` faces out each way
+  // (those faces were asked for by an earlier call) and ask for the next ones; see refine_all.
+  void prefetch_fan(Index h, int steps, bool keys) const noexcept;
+  void prefetch_vsplit(Index vs, int stage) const noexcept;
+  void prefetch_ecol(Index vs, int stage) const noexcept;
   void do_vsplit(Index vs, Index vl, Index vr, int pl, int pr);  // on ring_, cut vertices and their places given
   void do_ecol(Index vs);  // uses ring_/ring2_ left by extra_common_neighbors(vs)
   Index active_ancestor(Index leaf) const noexcept;
@@ -222,13 +259,18 @@ class SrMesh {
   const VertexHierarchy* h_;
   RefinementScheme scheme_;
   Index num_slots_ = 0;
-  std::vector<FaceSlot> faces_;  // one per original face
-  std::vector<NodeSlot> nodes_;  // one per node
-  std::vector<std::pair<Index, FaceSlot>> base_slots_;  // the base mesh's faces, for reset()
+  // Face slots are original faces renumbered in vsplit order (Hoppe's implicit layout): the base faces,
+  // then fl^ and fr^ of the last collapse, of the one before, and so on. The faces of a coarse mesh are
+  // then a prefix of the array, and a vsplit writes fl and fr side by side.
+  detail::SrVector<FaceSlot> faces_;  // one per original face, by slot
+  detail::SrVector<Index> slot_of_, face_of_;  // original face -> slot and back
+  detail::SrVector<Split> splits_;            // per non-leaf node
+  detail::SrVector<NodeSlot> nodes_;  // one per node
+  std::vector<std::pair<Index, FaceSlot>> base_slots_;  // the base mesh's faces by slot, for reset()
   std::vector<Index> base_corners_;                     // a half-edge of each root, as h_->roots()
-  std::vector<std::uint8_t> state_;
-  std::vector<std::uint64_t> keys_;  // VertexHierarchy::key per node, copied so that it can be prefetched
-  std::vector<Index> vu_of_vt_;     // per node: its sibling vu when it is its parent's vt, else kInvalid
+  detail::SrVector<std::uint8_t> state_;
+  detail::SrVector<std::uint64_t> keys_;  // VertexHierarchy::key per node, copied so that it can be prefetched
+  detail::SrVector<Index> vu_of_vt_;     // per node: its sibling vu when it is its parent's vt, else kInvalid
   std::vector<Index> active_list_;  // the active nodes, in no particular order
   std::size_t num_active_ = 0, num_faces_ = 0;
   void activate(Index v) {

@@ -167,6 +167,70 @@ TEST(Grid48, ExtractMeshEqualsExtractFastThenToMesh) {
     }
   }
 }
+// One front reused across thresholds (finer, coarser, full refinement, none): extract_mesh's vertex map is
+// left uninitialised and holds the previous descent's ids, which must never leak into the new mesh.
+TEST(Grid48, ExtractMeshOnAReusedFrontEqualsTheTwoStepPath) {
+  for (const auto& [w, h, tile] : {std::tuple{65, 65, 0}, std::tuple{70, 41, 0}, std::tuple{33, 90, 4}, std::tuple{2, 3, 0}}) {
+    const HeightField f = make_fractal_terrain(static_cast<std::size_t>(w), static_cast<std::size_t>(h), 31, 30.0f);
+    Grid48Options o;
+    o.tile_size = static_cast<std::size_t>(tile);
+    const Grid48 g(f, o);
+    Grid48Front reused(g);
+    for (float e : {3.0f, 0.5f, 12.0f, 0.0f, 1e9f, 1.0f, 0.2f}) {
+      Query q;
+      q.criterion = Criterion::object_error(e);
+      Grid48Front two_step(g);
+      two_step.extract_fast(q);
+      std::vector<Index> ids_a, ids_b;
+      const TriMesh a = two_step.to_mesh(&ids_a);
+      const TriMesh b = reused.extract_mesh(q, &ids_b);
+      ASSERT_EQ(a.num_faces(), b.num_faces()) << w << "x" << h << " threshold " << e;
+      ASSERT_EQ(a.num_vertices(), b.num_vertices());
+      std::map<Index, glm::vec3> pa, pb;  // lattice id -> position (clip vertices compared by the walk below)
+      for (std::size_t v = 0; v < a.num_vertices(); ++v)
+        if (ids_a[v] != kInvalid) pa[ids_a[v]] = a.positions[v];
+      for (std::size_t v = 0; v < b.num_vertices(); ++v)
+        if (ids_b[v] != kInvalid) pb[ids_b[v]] = b.positions[v];
+      EXPECT_EQ(pa, pb);
+      std::multiset<std::array<float, 9>> ta, tb;
+      for (const auto& [m, t] : {std::pair{&a, &ta}, std::pair{&b, &tb}})
+        for (std::size_t i = 0; i < m->num_faces(); ++i) {
+          int k0 = 0;  // rotate so the lexicographically smallest corner comes first (keeps orientation)
+          for (int k = 1; k < 3; ++k) {
+            const glm::vec3 p = m->positions[m->corner(i, k)], q0 = m->positions[m->corner(i, k0)];
+            if (std::tie(p.x, p.y, p.z) < std::tie(q0.x, q0.y, q0.z)) k0 = k;
+          }
+          std::array<float, 9> key{};
+          for (int k = 0; k < 3; ++k) {
+            const glm::vec3 p = m->positions[m->corner(i, (k0 + k) % 3)];
+            key[3 * k] = p.x, key[3 * k + 1] = p.y, key[3 * k + 2] = p.z;
+          }
+          t->insert(key);
+        }
+      EXPECT_EQ(ta, tb) << w << "x" << h << " threshold " << e;
+      EXPECT_EQ(reused.num_faces(), two_step.num_faces());
+      reused.validate();
+      expect_conforming_cover(b, double(w - 1), double(h - 1));
+    }
+  }
+}
+
+// The histogram bounds that size extract_mesh's output: never below the true counts, and close to them.
+TEST(Grid48, OutputSizeBoundsFromTheErrorHistogram) {
+  const HeightField f = make_fractal_terrain(257, 200, 12, 80.0f);
+  const Grid48 g(f);
+  Grid48Front front(g);
+  for (float e : {0.0f, 1e-6f, 0.01f, 0.1f, 0.5f, 1.0f, 2.5f, 10.0f, 40.0f, 1e6f}) {
+    Query q;
+    q.criterion = Criterion::object_error(e);
+    front.extract_fast(q);
+    EXPECT_GE(g.max_refined_above(e), front.num_refined()) << "threshold " << e;
+    EXPECT_GE(g.max_faces_above(e), front.num_faces()) << "threshold " << e;
+    // 1/32-octave slots: only the diamonds in the threshold's own slot can be counted in excess.
+    EXPECT_LE(double(g.max_faces_above(e)), 1.1 * double(front.num_faces()) + 64.0) << "threshold " << e;
+  }
+}
+
 
 TEST(Grid48, ErrorBoundHoldsOnGeneratedTerrainsOfAnySize) {
   check_error_bound(make_fractal_terrain(65, 65, 3), {0.5f, 2.0f, 8.0f, 30.0f});

@@ -2,7 +2,10 @@
 // meshes M^i stay manifold), stopping rules, odd input, and geometric quality on a sphere.
 #include "pm/qem_analysis.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -41,6 +44,70 @@ TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
           << "after " << k;  // face count checked below precisely for closed meshes
       EXPECT_EQ(r.euler_characteristic, in.euler_characteristic) << "topology changed after " << k;
       EXPECT_EQ(r.components, in.components);
+    }
+  }
+}
+
+// Every record against a brute-force reading of the mesh it collapses: M^i has each original face's corners
+// replaced by their ancestors among the first i nodes. fl holds vt->vu, fr holds vu->vt, fn0..fn3 are the faces
+// across (vu, vl), (vl, vt), (vt, vr), (vr, vu), and the stored ring is the 1-ring of vs in M^(i+1).
+TEST(QemAnalysis, RecordsMatchTheMeshesTheyCollapse) {
+  for (const TriMesh& m : {make_icosphere(2), make_grid(9, 7), make_torus(12, 8)}) {
+    const VertexHierarchy h = build_vertex_hierarchy(m);
+    const Index nl = static_cast<Index>(h.num_leaves());
+    std::vector<Index> top(h.num_nodes());
+    auto cut_at = [&](Index prefix) {  // top[v]: the ancestor of v among the nodes < prefix
+      for (Index v = prefix; v-- > 0;) {
+        const Index p = h.parent(v);
+        top[v] = (p != kInvalid && p < prefix) ? top[p] : v;
+      }
+    };
+    auto corners = [&](Index f) {
+      const auto c = h.face(f);
+      return std::array<Index, 3>{top[c[0]], top[c[1]], top[c[2]]};
+    };
+    auto holding = [&](Index x, Index y) {  // the live face holding x -> y, or kInvalid
+      for (Index f = 0; f < h.num_faces(); ++f) {
+        const auto c = corners(f);
+        if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+        for (int k = 0; k < 3; ++k)
+          if (c[k] == x && c[(k + 1) % 3] == y) return f;
+      }
+      return kInvalid;
+    };
+    ASSERT_GT(h.num_collapses(), 10u);
+    for (Index vs = nl; vs < h.num_nodes(); ++vs) {
+      const CollapseRecord& r = h.record(vs);
+      cut_at(vs);
+      EXPECT_EQ(holding(r.vt, r.vu), r.fl_hat) << "collapse " << vs - nl;
+      EXPECT_EQ(holding(r.vu, r.vt), r.fr_hat) << "collapse " << vs - nl;
+      if (r.fl_hat != kInvalid) {
+        const Index vl = top[r.vl_hat];
+        const auto c = corners(r.fl_hat);
+        EXPECT_TRUE(c[0] == vl || c[1] == vl || c[2] == vl);
+        EXPECT_EQ(r.fn[0], holding(vl, r.vu)) << "collapse " << vs - nl;
+        EXPECT_EQ(r.fn[1], holding(r.vt, vl)) << "collapse " << vs - nl;
+      }
+      if (r.fr_hat != kInvalid) {
+        const Index vr = top[r.vr_hat];
+        const auto c = corners(r.fr_hat);
+        EXPECT_TRUE(c[0] == vr || c[1] == vr || c[2] == vr);
+        EXPECT_EQ(r.fn[2], holding(vr, r.vt)) << "collapse " << vs - nl;
+        EXPECT_EQ(r.fn[3], holding(r.vu, vr)) << "collapse " << vs - nl;
+      }
+      cut_at(vs + 1);
+      std::vector<Index> ring;
+      for (Index f = 0; f < h.num_faces(); ++f) {
+        const auto c = corners(f);
+        if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+        for (int k = 0; k < 3; ++k)
+          if (c[k] == vs) ring.insert(ring.end(), {c[(k + 1) % 3], c[(k + 2) % 3]});
+      }
+      std::sort(ring.begin(), ring.end());
+      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      std::vector<Index> stored(h.stored_ring(vs).begin(), h.stored_ring(vs).end());
+      std::sort(stored.begin(), stored.end());
+      EXPECT_EQ(stored, ring) << "collapse " << vs - nl;
     }
   }
 }

@@ -193,6 +193,36 @@ TEST(SrMesh, KimLeeNeverForces) {
   EXPECT_EQ(sr.stats().forced_ecols, 0u);
 }
 
+// SrMesh stores faces in its own (vsplit) order; the API must still speak original face ids: neighbor()
+// names the active face across each edge, for_each_face visits faces in increasing id order.
+TEST(SrMesh, NeighborsAndFaceOrderUseOriginalFaceIds) {
+  for (const TriMesh& m : {make_torus(16, 10), make_grid(12, 9)}) {
+    const VertexHierarchy h = full_hierarchy(m);
+    SrMesh sr(h);
+    random_walk(sr, 3000, 5, 3000);
+    std::vector<Index> visited;
+    sr.for_each_face([&](Index f, Index a, Index b, Index c) {
+      visited.push_back(f);
+      EXPECT_EQ(sr.face(f), (std::array<Index, 3>{a, b, c}));
+    });
+    EXPECT_TRUE(std::is_sorted(visited.begin(), visited.end()));
+    EXPECT_EQ(visited.size(), sr.num_faces());
+    for (Index f : visited)
+      for (int k = 0; k < 3; ++k) {
+        const Index g = sr.neighbor(f, k);
+        if (g == kInvalid) continue;  // a border edge
+        ASSERT_LT(g, h.num_faces());
+        ASSERT_TRUE(sr.face_active(g));
+        const auto fc = sr.face(f), gc = sr.face(g);
+        const Index a = fc[static_cast<std::size_t>(k)], b = fc[static_cast<std::size_t>((k + 1) % 3)];
+        bool reversed = false;
+        for (int j = 0; j < 3; ++j)
+          reversed = reversed || (gc[static_cast<std::size_t>(j)] == b && gc[static_cast<std::size_t>((j + 1) % 3)] == a);
+        EXPECT_TRUE(reversed) << "face " << f << " edge " << k << " neighbour " << g;
+      }
+  }
+}
+
 TEST(SrMesh, RejectsBadRequests) {
   const VertexHierarchy h = full_hierarchy(make_icosphere(1));
   SrMesh sr(h);
