@@ -43,6 +43,13 @@
 #include <OpenMesh/Tools/VDPM/MeshTraits.hh>
 #include <OpenMesh/Tools/VDPM/VFront.hh>
 #include <OpenMesh/Tools/VDPM/VHierarchy.hh>
+#if VARMESH_HAVE_CGAL
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_simplification/edge_collapse.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_cost.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_placement.h>
+#endif
 
 #include "multitri/bounds.hpp"
 #include "multitri/camera.hpp"
@@ -502,6 +509,53 @@ std::string fmt(const char* f, double a) {
   return buf;
 }
 
+#if VARMESH_HAVE_CGAL
+// CGAL's Lindstrom-Turk edge collapse (Surface_mesh_simplification, LT cost and placement), stopped at the
+// face count: the error reference of issue 3 (its peers.md figure is quoted from a CGAL run).
+struct CgalResult {
+  SimplifyResult simplified;
+  std::size_t rejected_faces = 0;
+};
+
+// Stops when the mesh has at most `target` faces (CGAL's own predicates count edges).
+struct StopAtFaces {
+  std::size_t target;
+  template <class F, class Profile>
+  bool operator()(const F&, const Profile& p, std::size_t, std::size_t) const {
+    return p.surface_mesh().number_of_faces() <= target;
+  }
+};
+
+CgalResult run_cgal(const TriMesh& m, std::size_t target_faces) {
+  using Kernel = CGAL::Simple_cartesian<double>;
+  using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
+  namespace SMS = CGAL::Surface_mesh_simplification;
+  CgalResult out;
+  const Stopwatch sw;
+  Mesh mesh;
+  std::vector<Mesh::Vertex_index> vh(m.num_vertices());
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    vh[v] = mesh.add_vertex(Kernel::Point_3(m.positions[v].x, m.positions[v].y, m.positions[v].z));
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    if (mesh.add_face(vh[m.indices[3 * f]], vh[m.indices[3 * f + 1]], vh[m.indices[3 * f + 2]]) == Mesh::null_face())
+      ++out.rejected_faces;
+  SMS::edge_collapse(mesh, StopAtFaces{target_faces},
+                     CGAL::parameters::get_cost(SMS::LindstromTurk_cost<Mesh>())
+                         .get_placement(SMS::LindstromTurk_placement<Mesh>()));
+  out.simplified.time = sw.lap();
+  std::vector<Index> remap(mesh.num_vertices(), kInvalid);
+  for (Mesh::Vertex_index v : mesh.vertices()) {
+    const auto& p = mesh.point(v);
+    remap[v.idx()] = static_cast<Index>(out.simplified.positions.size());
+    out.simplified.positions.push_back({float(p.x()), float(p.y()), float(p.z())});
+  }
+  for (Mesh::Face_index f : mesh.faces())
+    for (Mesh::Vertex_index v : CGAL::vertices_around_face(mesh.halfedge(f), mesh))
+      out.simplified.indices.push_back(remap[v.idx()]);
+  return out;
+}
+#endif
+
 struct AnalysisRow {
   std::string mesh, method;
   std::size_t faces = 0;
@@ -535,6 +589,10 @@ void analysis(const TriMesh& m, const char* name, int reps, std::vector<Analysis
   std::size_t full_collapses = 0, full_base_faces = 0, mem = 0, nfaces = 0, depth = 0;
   SimplifyResult mo;
   OmResult om;
+#if VARMESH_HAVE_CGAL
+  CgalResult cg;
+  Laps t_cg;
+#endif
   for (int i = 0; i < reps; ++i) {
     {
       QemOptions opt;
@@ -561,6 +619,10 @@ void analysis(const TriMesh& m, const char* name, int reps, std::vector<Analysis
     om = run_openmesh(m, target);
     t_om.add(om.simplified.time);
     t_om_build.add(om.build);
+#if VARMESH_HAVE_CGAL
+    cg = run_cgal(m, target);
+    t_cg.add(cg.simplified.time);
+#endif
     std::printf("  rep %d (CPU s): varmesh %.3f (1%%), %.3f (smallest base); meshopt %.3f; OpenMesh %.3f\n", i,
                 t_vm.cpu.back(), t_full.cpu.back(), t_mo.cpu.back(), t_om.cpu.back());
     std::fflush(stdout);
@@ -582,6 +644,16 @@ void analysis(const TriMesh& m, const char* name, int reps, std::vector<Analysis
                 "incl. %.3f s CPU to build its halfedge mesh; %zu complex faces rejected; half-edge collapses; no hierarchy",
                 t_om_build.med().cpu, om.rejected_faces);
   rows.push_back({name, "OpenMesh 9.0 Decimater + ModQuadric", om.simplified.indices.size() / 3, t_om.med(), d_om, true, buf});
+#if VARMESH_HAVE_CGAL
+  const Distance d_cg = distance_to(m, cg.simplified.positions, cg.simplified.indices);
+  std::snprintf(buf, sizeof buf, "CGAL %s Surface_mesh, LindstromTurk cost + placement; %zu non-manifold faces rejected; no hierarchy",
+                CGAL_VERSION_STR, cg.rejected_faces);
+  rows.push_back({name, "CGAL Lindstrom-Turk edge_collapse", cg.simplified.indices.size() / 3, t_cg.med(), d_cg, true, buf});
+  std::printf("  error ratio varmesh / CGAL Lindstrom-Turk: RMS %.2f, max %.2f (goal: at most 1.1)\n", d_vm.rms / d_cg.rms,
+              d_vm.max / d_cg.max);
+#else
+  std::printf("  CGAL not found at build time: no Lindstrom-Turk reference (apt-get install libcgal-dev)\n");
+#endif
 }
 
 struct SynthRow {

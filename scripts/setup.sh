@@ -2,7 +2,7 @@
 # One idempotent set-up: installs the Debian packages varmesh needs (only those missing), then configures
 # and builds the Release tree in build/release. Usage: scripts/setup.sh [--asan] [--bench] [--no-build]
 #   --asan      also configure and build the Debug + ASan/UBSan tree in build/asan
-#   --bench     also install the peer libraries the benchmarks compare against (meshoptimizer, OpenMesh)
+#   --bench     also install the peer libraries the benchmarks compare against (meshoptimizer, OpenMesh, CGAL)
 #   --no-build  install packages only
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,7 +20,7 @@ for a in "$@"; do
 done
 packages=(cmake g++ make libeigen3-dev libglm-dev libosd-dev libgtest-dev libgmock-dev libbenchmark-dev
           libpng-dev libcli11-dev zlib1g-dev)
-[ $bench -eq 1 ] && packages+=(libmeshoptimizer-dev libopenmesh-dev)
+[ $bench -eq 1 ] && packages+=(libmeshoptimizer-dev libopenmesh-dev libcgal-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
