@@ -62,7 +62,7 @@ void sr_deallocate(void* p, std::size_t bytes) noexcept {
     return;
   }
 #endif
-  ::operator delete(p);
+  ::operator delete(p, bytes);  // sized: also the only use of bytes when huge pages are off
 }
 
 }  // namespace detail
