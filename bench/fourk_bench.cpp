@@ -456,8 +456,8 @@ void bench_orbit(const Options& o, const Mt& mt, const TriMesh& base) {
     }
   }
   a.validate();
-  // Where update()'s time goes: it lists every refine candidate of the whole front (one entry per pre-image
-  // face, so a 2-face node twice) and every maximal applied node, and asks the criterion about each.
+  // Where update()'s time goes: it lists the front's refine candidates (each node once, from MtFront's
+  // candidate set) and its undoable nodes, and asks the criterion about each.
   std::size_t listed = 0, coarsen_listed = 0;
   std::vector<Index> cand;
   a.for_each_refine_candidate([&](Index e) {

@@ -811,9 +811,9 @@ void frames(const Options& o, const TriMesh& m, const char* name) {
   std::vector<Query> queries;
   for (const Camera& cam : cams) queries.push_back(orbit_query(cam, tol));
 
-  Laps t_up, t_ex, t_wf, t_vd;
+  Laps t_up, t_ex, t_co, t_vd;
   std::vector<double> faces;
-  std::size_t finer = 0, coarser = 0, max_extra = 0, wf_diff = 0, coarsened = 0, refined = 0, vd_diff = 0;
+  std::size_t finer = 0, coarser = 0, max_extra = 0, co_diff = 0, coarsened = 0, refined = 0, vd_diff = 0;
   std::size_t co_evaluated = 0, co_reused = 0;
   QueryCoherence coherence;
   const int orbits = std::max(1, o.reps / 2 + 1);
@@ -853,8 +853,8 @@ void frames(const Options& o, const TriMesh& m, const char* name) {
     for (int i = 1; i <= kFrames; ++i) {
       const Stopwatch sw;
       const QueryStats qs = update(c, queries[static_cast<std::size_t>(i)], coherence);
-      t_wf.add(sw.lap());
-      wf_diff += c.num_faces() != faces_up[static_cast<std::size_t>(i)];
+      t_co.add(sw.lap());
+      co_diff += c.num_faces() != faces_up[static_cast<std::size_t>(i)];
       if (rep == 0) {
         co_evaluated += qs.evaluated;
         co_reused += qs.reused;
@@ -882,7 +882,7 @@ void frames(const Options& o, const TriMesh& m, const char* name) {
               "from update() in %zu frames and evaluates %.0f / reuses %.0f answers per frame (mean, first orbit); VDPM "
               "differs from extract() in %zu frames\n",
               finer, coarser, n, max_extra, static_cast<double>(coarsened) / static_cast<double>(n),
-              static_cast<double>(refined) / static_cast<double>(n), wf_diff,
+              static_cast<double>(refined) / static_cast<double>(n), co_diff,
               static_cast<double>(co_evaluated) / kFrames, static_cast<double>(co_reused) / kFrames, vd_diff);
   auto row = [&](const char* what, const Laps& l) {
     const Lap md = l.med(), p = l.p95();
@@ -893,11 +893,11 @@ void frames(const Options& o, const TriMesh& m, const char* name) {
               "wall p95 |\n|---|---|---|---|---|---|\n", orbits, kFrames);
   row("varmesh update() (incremental)", t_up);
   row("varmesh extract() (from scratch)", t_ex);
-  row("varmesh update() with QueryCoherence", t_wf);
+  row("varmesh update() with QueryCoherence", t_co);
   if (vd) row("OpenMesh VDPM loop, same hierarchy and criterion", t_vd);
   else std::printf("OpenMesh VDPM not run: %s\n", vdpm_note.c_str());
   std::printf("(extract / update CPU median = %.1fx; update / coherent update = %.1fx", t_ex.med().cpu / t_up.med().cpu,
-              t_up.med().cpu / t_wf.med().cpu);
+              t_up.med().cpu / t_co.med().cpu);
   if (vd) std::printf("; VDPM / update = %.1fx", t_vd.med().cpu / t_up.med().cpu);
   std::printf(")\n");
 }

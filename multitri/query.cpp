@@ -58,6 +58,15 @@ bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float* marg
 
 bool entirely_facing(const ElementBound& b, const glm::vec3& eye, float sign) { return facing(b, eye, sign, nullptr); }
 
+// Screen-space error test: the error seen from `eye` at the sphere's nearest point is at most `pixels`
+// (scale = pixels per unit at distance one). Inside the sphere only a zero error is fine. `dist` receives
+// the distance from the eye to the sphere.
+bool screen_fine(const ElementBound& b, const glm::vec3& eye, float scale, float pixels, float& dist) {
+  dist = glm::length(b.center - eye) - b.radius;
+  if (dist <= 0.0f) return b.error <= 0.0f;
+  return b.error * scale <= pixels * dist;
+}
+
 // Rounding slack for margins computed from lengths of about `scale`.
 float rounding(float scale) { return 1e-5f * scale + 1e-30f; }
 
@@ -141,10 +150,8 @@ bool Criterion::is_fine(const ElementBound& b) const {
     case Kind::kObjectError:
       return b.error <= value_;
     case Kind::kScreenError: {
-      // Distance from the eye to the nearest point of the sphere; error * scale / distance <= pixels.
-      const float dist = glm::length(b.center - point_) - b.radius;
-      if (dist <= 0.0f) return b.error <= 0.0f;
-      return b.error * scale_ <= value_ * dist;
+      float dist = 0.0f;
+      return screen_fine(b, point_, scale_, value_, dist);
     }
     case Kind::kOutsideFrustum:
       return !frustum_.intersects_sphere(b.center, b.radius);
@@ -182,16 +189,15 @@ bool Criterion::is_fine_with_margin(const ElementBound& b, float& margin) const 
       margin = kInf;  // motion_to() refuses a change of threshold or points
       return is_fine(b);
     case Kind::kScreenError: {
-      const float len = glm::length(b.center - point_);
-      const float dist = len - b.radius;
+      float dist = 0.0f;
+      const bool fine = screen_fine(b, point_, scale_, value_, dist);
       if (b.error <= 0.0f) {
         margin = kInf;  // fine from everywhere
         return true;
       }
-      const bool fine = dist > 0.0f && b.error * scale_ <= value_ * dist;
       // Fine iff dist >= t (t > 0), dist being 1-Lipschitz in the eye.
       const float t = b.error * scale_ / value_;
-      const float m = std::fabs(dist - t) - rounding(len + b.radius + t);
+      const float m = std::fabs(dist - t) - rounding(dist + 2.0f * b.radius + t);
       margin = ((dist >= t) == fine && m > 0.0f) ? m : 0.0f;
       return fine;
     }
