@@ -8,6 +8,10 @@
 #include <thread>
 #include <unordered_map>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "multitri/errors.hpp"
 
 #include <glm/mat3x3.hpp>
@@ -929,39 +933,191 @@ Query ViewQuery::to_query() const {
   return q;
 }
 
-// Evaluates diamond p for the view and records how much camera motion it can take before its status can
-// change. Frustum: each plane's signed distance at the centre moves by at most |d eye| + angle * |c - eye|
-// (the planes turn with the camera); screen error: distance minus radius moves by at most |d eye|. Returns
-// "wanted" exactly as Query::wants would (same formulas as Criterion::is_fine).
-bool Grid48Front::evaluate_view(const Geo& d, const ViewQuery& v, const Frustum& fr, float scale, Slack& s) {
-  const glm::vec3 c = d.centre;
+namespace {
+
+constexpr float kForever = 3.0e38f;
+// (v + a) * kShrink < v + a for float rounding of the sum and the product (v, a > 0, normal).
+constexpr float kShrink = 1.0f - 0x1p-22f;
+
+// The float nearest to v that is not below (above) it.
+float float_up(double v) {
+  float f = static_cast<float>(v);
+  if (static_cast<double>(f) < v) f = std::nextafter(f, kForever);
+  return f;
+}
+float float_down(double v) {
+  float f = static_cast<float>(v);
+  if (static_cast<double>(f) > v) f = std::nextafter(f, -kForever);
+  return f;
+}
+
+}  // namespace
+
+// One frame's view, in the form the evaluations read.
+struct Grid48Front::ViewContext {
+  Frustum frustum;
+  glm::vec3 eye{};
+  float scale = 0.0f, pixels = 1.0f, object_error = -1.0f;
+  float per_pixel = 0.0f;       // scale / pixels
+  bool motion_known = false;    // false: no previous frame (the slack is split in halves)
+  float step_moved = 0.0f, step_turned = 0.0f;  // this frame's increments
+  float moved_up = 0.0f, turned_up = 0.0f;      // accumulated motion now, rounded up
+  float moved_down = 0.0f, turned_down = 0.0f;  // and down
+  // Lattice point -> centre x, y.
+  FastDivider row_of;
+  std::uint32_t lw = 1;
+  float sx = 1.0f, sy = 1.0f;
+
+  // A record is still valid (its diamond's status cannot have changed since it was made).
+  bool holds(const Expiry& x) const noexcept { return moved_up < x.moved && turned_up < x.turned; }
+  bool evaluate(const Entry& d, Expiry& x) const noexcept;
+};
+
+// Evaluates a diamond for the view and records how much camera motion it can take before its status can
+// change. Frustum: each plane's signed distance at the centre moves by at most t + theta * |c - eye| after
+// a translation t and a rotation theta of the camera (the planes turn with it); screen error: distance
+// minus radius moves by at most t. A diamond is wanted when it is inside the frustum and too coarse on
+// screen; it stays unwanted while *either* reason for being unwanted holds (the larger of the two slacks),
+// and wanted while both hold (the smaller). Returns "wanted" exactly as Query::wants would (same formulas as
+// Criterion::is_fine).
+//
+// The slack s bounds t + theta * (rho + t) (rho = distance + radius); it is split into a translation
+// budget a and a rotation budget b with a + b (rho + a) <= s, in proportion to the last frame's motion (so
+// that both run out together if the camera keeps moving the same way), and stored as the accumulated
+// motion at which the record expires.
+inline bool Grid48Front::ViewContext::evaluate(const Entry& d, Expiry& x) const noexcept {
   const float r = d.radius, e = d.error;
-  s.t0 = moved_;
-  s.r0 = turned_;
-  const float dist = glm::length(c - v.camera.eye);
-  s.rho = dist + r;
-  if (v.object_error >= 0.0f && e <= v.object_error) {  // fine for ever (under this view query)
-    s.slack = 3.0e38f;
+  if (e <= object_error) {  // fine for ever under this view query (errors are >= 0; object_error < 0: unused)
+    x = {kForever, kForever};
     return false;
   }
-  // Frustum: outside if some plane has distance < -r.
-  float outside_by = -1.0f, inside_by = 3.0e38f;
-  for (const Plane& pl : fr.planes) {
-    const float sd = pl.signed_distance(c) + r;
-    if (sd < 0.0f) outside_by = std::max(outside_by, -sd);
-    inside_by = std::min(inside_by, sd);
+  const std::uint32_t py = row_of.div(d.point), px = d.point - py * lw;
+  const glm::vec3 c(float(px) * sx, float(py) * sy, d.z);
+  // Frustum: outside if some plane has signed distance < -r, i.e. if the smallest one has.
+  const auto& pl = frustum.planes;
+  const float s01 = std::min(pl[0].signed_distance(c), pl[1].signed_distance(c));
+  const float s23 = std::min(pl[2].signed_distance(c), pl[3].signed_distance(c));
+  const float s45 = std::min(pl[4].signed_distance(c), pl[5].signed_distance(c));
+  const float nearest = std::min(s01, std::min(s23, s45)) + r;  // < 0: outside by -nearest
+  // Screen error: fine when e * scale <= pixels * (dist - r); room = how far dist - r may fall until not.
+  const float dist = glm::length(c - eye);
+  const float gap = dist - r;
+  const bool fine = gap > 0.0f ? e * scale <= pixels * gap : e <= 0.0f;
+  const float room = gap - e * per_pixel;
+  const bool wanted = !(nearest < 0.0f) && !fine;
+  float slack;
+  if (wanted)
+    slack = std::min(nearest, -room);
+  else
+    slack = std::max(-nearest, fine ? (e <= 0.0f ? kForever : room) : -1.0f);
+  if (slack >= kForever) {
+    x = {kForever, kForever};
+    return wanted;
   }
-  const float margin = 1e-5f * (dist + r + 1.0f);
-  if (outside_by > 0.0f) {
-    s.slack = outside_by - margin;
-    return false;
+  const float s = slack - 1e-5f * (dist + r + 1.0f);  // margin for the rounding of the tests above
+  if (!(s > 0.0f)) {
+    x = {};  // re-evaluated next frame
+    return wanted;
   }
-  // Screen error: fine when e * scale <= pixels * (dist - r).
-  const float room = dist - r - e * scale / v.pixels;
-  const bool fine = dist - r > 0.0f ? e * scale <= v.pixels * (dist - r) : e <= 0.0f;
-  // Not outside: stays so while every plane keeps its side; the screen status while |room| holds.
-  s.slack = std::min(inside_by, std::abs(room)) - margin;
-  return !fine;
+  // Translation budget a, rotation budget b = what is left: a + b (rho + a) = s. The share of a follows the
+  // last frame's motion, so that both run out at about the same time if the camera keeps moving that way;
+  // each gets at least 1/64 of the slack (a camera that stops or starts turning costs one evaluation).
+  const float rho = dist + r;
+  const float share = motion_known ? step_moved / (step_moved + step_turned * (rho + s)) : 0.5f;
+  const float a = s * std::clamp(share, 1.0f / 64.0f, 63.0f / 64.0f);
+  const float b = (s - a) / (rho + a);
+  // The shrink factors absorb the rounding of a, b and a + b (rho + a), and of the stored sums.
+  x.moved = (moved_down + a * (1.0f - 0x1p-16f)) * kShrink;
+  x.turned = (turned_down + b * (1.0f - 0x1p-16f)) * kShrink;
+  return wanted;
+}
+
+// How many list items ahead update_view issues the loads of the next items (several refinements' and
+// evaluations' cache misses then overlap instead of following one another).
+constexpr std::size_t kAhead = 6;
+
+// Evaluates the stale diamonds of a set and appends to `out` those whose status is `pick` (true: wanted).
+// The stale indices are found first (a sequential pass over the expiries), then evaluated with each
+// entry's load issued kAhead evaluations early. Returns the number of evaluations.
+std::size_t Grid48Front::scan_stale(BoundarySet& s, const ViewContext& cx, bool pick, std::vector<Index>& out) {
+  std::vector<Index>& stale = view_stale_;
+  if (stale.size() < s.size()) stale.resize(s.size());
+  // Stale: moved or turned has reached its limit (!holds()).
+  const std::size_t n = s.size();
+  const float* xs = reinterpret_cast<const float*>(s.expiry.data());  // moved, turned, moved, ...
+  Index* st = stale.data();
+  const float mu = cx.moved_up, tu = cx.turned_up;
+  std::size_t m = 0, i = 0;
+#if defined(__SSE2__)
+  // Four records per step; most steps find none stale.
+  const __m128 limit = _mm_setr_ps(mu, tu, mu, tu);
+  for (; i + 4 <= n; i += 4) {
+    const int lo = _mm_movemask_ps(_mm_cmple_ps(_mm_loadu_ps(xs + 2 * i), limit));
+    const int hi = _mm_movemask_ps(_mm_cmple_ps(_mm_loadu_ps(xs + 2 * i + 4), limit));
+    const int bits = lo | hi << 4;  // bits 2j, 2j + 1: record i + j
+    if (bits == 0) continue;
+    for (int j = 0; j < 4; ++j) {
+      st[m] = static_cast<Index>(i + static_cast<std::size_t>(j));
+      m += ((bits >> (2 * j)) & 3) != 0;
+    }
+  }
+#endif
+  for (; i < n; ++i) {
+    st[m] = static_cast<Index>(i);
+    m += (xs[2 * i] <= mu) | (xs[2 * i + 1] <= tu);
+  }
+  for (std::size_t k = 0; k < m; ++k) {
+    if (k + kAhead < m) {
+      __builtin_prefetch(&s.entry[stale[k + kAhead]]);
+      __builtin_prefetch(&s.expiry[stale[k + kAhead]], 1);
+    }
+    const Index j = stale[k];
+    if (cx.evaluate(s.entry[j], s.expiry[j]) == pick) out.push_back(s.entry[j].point);
+  }
+  return m;
+}
+
+// The entry of p in s, once slot_[p] has arrived (its load issued by prefetch_refine or prefetch_coarsen).
+void Grid48Front::prefetch_entry(const BoundarySet& s, Index p) const {
+  const Index i = slot_[p];
+  if (i < s.size()) {
+    __builtin_prefetch(&s.entry[i]);
+    __builtin_prefetch(&s.expiry[i]);
+  }
+}
+
+// The loads on_refined(p) and refine(p) will make (p exposed: its parents are refined).
+void Grid48Front::prefetch_refine(Index p) const {
+  const Grid48& g = *grid_;
+  const Grid48::Family f = g.family(p);
+  __builtin_prefetch(&slot_[p]);
+  for (int k = 0; k < f.num_parents; ++k) {
+    __builtin_prefetch(&refined_[f.parent[k]]);
+    __builtin_prefetch(&slot_[f.parent[k]]);
+  }
+  for (int k = 0; k < f.num_children; ++k) {
+    __builtin_prefetch(&slot_[f.child[k]]);
+    __builtin_prefetch(g.records() + f.child[k]);
+    __builtin_prefetch(g.radii() + f.child[k]);
+  }
+}
+
+// The loads on_coarsened(p) will make (p maximal).
+void Grid48Front::prefetch_coarsen(Index p) const {
+  const Grid48& g = *grid_;
+  const Grid48::Family f = g.family(p);
+  __builtin_prefetch(&slot_[p]);
+  for (int k = 0; k < f.num_parents; ++k) {
+    const Index q = f.parent[k];
+    __builtin_prefetch(&slot_[q]);
+    __builtin_prefetch(g.records() + q);
+    __builtin_prefetch(g.radii() + q);
+    g.for_each_child(q, [&](Index c) { __builtin_prefetch(&refined_[c]); });
+  }
+  for (int k = 0; k < f.num_children; ++k) {
+    __builtin_prefetch(&slot_[f.child[k]]);
+    if (f.co_parent[k] != kInvalid) __builtin_prefetch(&refined_[f.co_parent[k]]);
+  }
 }
 
 QueryStats Grid48Front::update_view(const ViewQuery& v) {
@@ -972,82 +1128,93 @@ QueryStats Grid48Front::update_view(const ViewQuery& v) {
                            o.camera.z_far == v.camera.z_far;
   if (!sets_valid_) rebuild_sets();
   if (!same_params) {
-    // Everything is re-evaluated: forget every slack (they were computed for other parameters).
-    std::fill(exposed_.slack.begin(), exposed_.slack.end(), Slack{});
-    std::fill(maximal_.slack.begin(), maximal_.slack.end(), Slack{});
-    moved_ = turned_ = 0.0f;
+    // Everything is re-evaluated: forget every record (they were made for other parameters).
+    std::fill(exposed_.expiry.begin(), exposed_.expiry.end(), Expiry{});
+    std::fill(maximal_.expiry.begin(), maximal_.expiry.end(), Expiry{});
+    moved_ = turned_ = 0.0;
+    step_moved_ = step_turned_ = 0.0f;
   } else {
-    moved_ += glm::length(v.camera.eye - o.camera.eye);
+    step_moved_ = glm::length(v.camera.eye - o.camera.eye);
     // Rotation between the two view frames, as an angle (geodesic distance on SO(3)).
     const glm::mat3 ra(o.camera.view()), rb(v.camera.view());
     const glm::mat3 rel = glm::transpose(ra) * rb;
     const float tr = rel[0][0] + rel[1][1] + rel[2][2];
-    turned_ += std::acos(std::clamp((tr - 1.0f) * 0.5f, -1.0f, 1.0f)) + 1e-6f;
+    step_turned_ = std::acos(std::clamp((tr - 1.0f) * 0.5f, -1.0f, 1.0f)) + 1e-6f;
+    moved_ += double(step_moved_);
+    turned_ += double(step_turned_);
   }
   last_view_ = v;
   view_valid_ = true;
-  const Frustum fr = v.camera.frustum();
-  const float scale = v.camera.pixels_per_unit_at_distance_one(v.viewport_height);
-  auto stale = [&](const Slack& s) {
-    const float t = moved_ - s.t0, th = turned_ - s.r0;
-    return s.slack < 0.0f || t + th * (s.rho + t) >= s.slack;
-  };
+  ViewContext cx;
+  cx.frustum = v.camera.frustum();
+  cx.eye = v.camera.eye;
+  cx.scale = v.camera.pixels_per_unit_at_distance_one(v.viewport_height);
+  cx.pixels = v.pixels;
+  cx.per_pixel = cx.scale / v.pixels;
+  cx.motion_known = same_params;
+  cx.object_error = v.object_error;
+  cx.step_moved = step_moved_;
+  cx.step_turned = step_turned_;
+  cx.moved_up = float_up(moved_);
+  cx.turned_up = float_up(turned_);
+  cx.moved_down = float_down(moved_);
+  cx.turned_down = float_down(turned_);
+  cx.row_of = FastDivider(static_cast<std::uint32_t>(grid_->lattice_width()));
+  cx.lw = static_cast<std::uint32_t>(grid_->lattice_width());
+  cx.sx = grid_->spacing_x();
+  cx.sy = grid_->spacing_y();
   QueryStats stats;
+  std::vector<Index>& work = view_work_;
+  std::vector<Index>& fresh = view_new_;
+  carry_records_ = true;
   // Coarsen. Stale maximal diamonds are evaluated in place (a sequential scan); those no longer wanted are
-  // coarsened afterwards. A diamond whose record is still fresh keeps its status, so after the scan only
-  // diamonds that become maximal during this frame (parents of coarsened ones) need an evaluation.
-  std::vector<std::pair<Index, Slack>> unwanted;
-  std::vector<Index> work, fresh;
+  // coarsened afterwards (which never changes another's status). A diamond whose record still holds keeps
+  // its status, so after the scan only diamonds that become maximal during this frame (parents of
+  // coarsened ones) need an evaluation. A coarsened diamond takes its record ("not wanted") to the exposed
+  // set.
+  work.clear();
+  fresh.clear();
+  stats.evaluated += scan_stale(maximal_, cx, false, work);
   new_maximal_ = &fresh;
-  for (std::size_t i = 0; i < maximal_.items.size(); ++i) {
-    Slack& s = maximal_.slack[i];
-    if (!stale(s)) continue;
-    ++stats.evaluated;
-    if (!evaluate_view(maximal_.geo[i], v, fr, scale, s)) unwanted.emplace_back(maximal_.items[i], s);
-  }
-  // The record of a diamond found not wanted stays valid once it is exposed.
-  auto coarsen = [&](Index p, const Slack& record) {
-    coarsen_one(p);
+  for (std::size_t k = 0; k < work.size(); ++k) {
+    if (k + kAhead < work.size()) prefetch_coarsen(work[k + kAhead]);
+    if (k + kAhead / 2 < work.size()) prefetch_entry(maximal_, work[k + kAhead / 2]);
+    coarsen_unchecked(work[k]);
     ++stats.coarsened;
-    exposed_.slack[exposed_.pos[p]] = record;
-  };
-  for (const auto& [p, record] : unwanted) coarsen(p, record);  // never changes another's status
+  }
   while (!fresh.empty()) {
     const Index p = fresh.back();
     fresh.pop_back();
-    const Index i = maximal_.pos[p];
-    if (i == kInvalid || !stale(maximal_.slack[i])) continue;
+    const Index i = slot_[p];
+    if (!refined_[p] || i == kInvalid || cx.holds(maximal_.expiry[i])) continue;
     ++stats.evaluated;
-    if (evaluate_view(maximal_.geo[i], v, fr, scale, maximal_.slack[i])) continue;
-    const Slack record = maximal_.slack[i];  // copied: coarsening moves the set's entries
-    coarsen(p, record);
+    if (cx.evaluate(maximal_.entry[i], maximal_.expiry[i])) continue;
+    coarsen_unchecked(p);
+    ++stats.coarsened;
   }
   new_maximal_ = nullptr;
   // Refine. Stale exposed diamonds are evaluated in place; the wanted ones are refined afterwards (with
-  // their missing ancestors), and the diamonds they newly expose are evaluated in turn.
+  // their missing ancestors), taking their records ("wanted") to the maximal set, and the diamonds they
+  // newly expose are evaluated in turn.
   work.clear();
-  for (std::size_t i = 0; i < exposed_.items.size(); ++i) {
-    Slack& s = exposed_.slack[i];
-    if (!stale(s)) continue;
-    ++stats.evaluated;
-    if (evaluate_view(exposed_.geo[i], v, fr, scale, s)) work.push_back(exposed_.items[i]);
-  }
+  stats.evaluated += scan_stale(exposed_, cx, true, work);
   new_exposed_ = &fresh;
   auto refine_wanted = [&](Index p) { refine(p, [&](Index) { ++stats.refined; }); };
-  for (Index p : work) refine_wanted(p);
+  for (std::size_t k = 0; k < work.size(); ++k) {
+    if (k + kAhead < work.size()) prefetch_refine(work[k + kAhead]);
+    if (k + kAhead / 2 < work.size()) prefetch_entry(exposed_, work[k + kAhead / 2]);
+    refine_wanted(work[k]);
+  }
   while (!fresh.empty()) {
     const Index p = fresh.back();
     fresh.pop_back();
-    const Index i = exposed_.pos[p];
-    if (i == kInvalid || !stale(exposed_.slack[i])) continue;
+    const Index i = slot_[p];
+    if (refined_[p] || i == kInvalid || cx.holds(exposed_.expiry[i])) continue;
     ++stats.evaluated;
-    if (evaluate_view(exposed_.geo[i], v, fr, scale, exposed_.slack[i])) refine_wanted(p);
+    if (cx.evaluate(exposed_.entry[i], exposed_.expiry[i])) refine_wanted(p);
   }
   new_exposed_ = nullptr;
-  // Maximal diamonds without a record (refined now, or parents of coarsened ones) are wanted; evaluate them
-  // now so that the next frame can skip them.
-  for (std::size_t i = 0; i < maximal_.items.size(); ++i)
-    if (maximal_.slack[i].slack < 0.0f) evaluate_view(maximal_.geo[i], v, fr, scale, maximal_.slack[i]);
+  carry_records_ = false;
   return stats;
 }
 
@@ -1058,58 +1225,123 @@ void Grid48Front::reset() {
   touched_valid_ = true;  // nothing is marked: the next clear_refined has nothing to clear
   num_refined_ = 0;
   num_faces_ = 2 * grid_->tiles_x() * grid_->tiles_y();
-  exposed_.reset(*grid_);
-  maximal_.reset(*grid_);
+  exposed_.clear();
+  maximal_.clear();
+  slot_.assign(grid_->num_points(), kInvalid);
   view_valid_ = false;
   const std::size_t s = grid_->tile_size(), w = grid_->lattice_width();
   for (std::size_t ty = 0; ty < grid_->tiles_y(); ++ty)
-    for (std::size_t tx = 0; tx < grid_->tiles_x(); ++tx)
-      exposed_.insert(static_cast<Index>((ty * s + s / 2) * w + tx * s + s / 2));
+    for (std::size_t tx = 0; tx < grid_->tiles_x(); ++tx) {
+      const Index p = static_cast<Index>((ty * s + s / 2) * w + tx * s + s / 2);
+      set_add(exposed_, entry_of(p), {});
+    }
   sets_valid_ = true;
+}
+
+void Grid48Front::set_add(BoundarySet& s, const Entry& e, Expiry x) const {
+  slot_[e.point] = static_cast<Index>(s.entry.size());
+  s.entry.push_back(e);
+  s.expiry.push_back(x);
+}
+
+void Grid48Front::set_remove(BoundarySet& s, Index p) const {
+  const Index i = slot_[p];
+  const Index last = static_cast<Index>(s.entry.size() - 1);
+  if (i != last) {
+    s.entry[i] = s.entry[last];
+    s.expiry[i] = s.expiry[last];
+    slot_[s.entry[i].point] = i;
+  }
+  s.entry.pop_back();
+  s.expiry.pop_back();
+  slot_[p] = kInvalid;
 }
 
 void Grid48Front::rebuild_sets() const {
   const Grid48& g = *grid_;
-  exposed_.reset(g);
-  maximal_.reset(g);
+  exposed_.clear();
+  maximal_.clear();
+  slot_.assign(g.num_points(), kInvalid);
   for (Index p = 0; p < g.num_points(); ++p) {
     if (!g.is_node(p)) continue;
     if (refined_[p]) {
       bool leaf = true;
       g.for_each_child(p, [&](Index c) { leaf = leaf && !refined_[c]; });
-      if (leaf) maximal_.insert(p);
+      if (leaf) set_add(maximal_, entry_of(p), {});
     } else {
       bool exposed = g.level(p) == 0;
       g.for_each_parent(p, [&](Index q) { exposed = exposed || refined_[q]; });
-      if (exposed) exposed_.insert(p);
+      if (exposed) set_add(exposed_, entry_of(p), {});
     }
   }
   sets_valid_ = true;
 }
 
+// t was exposed (every parent refined) and is now refined: it moves to the maximal set (with its record
+// when update_view refines it because it is wanted), its parents leave it, its new children are exposed.
+// The slot of a refined point refers to maximal_, of an unrefined one to exposed_.
 void Grid48Front::on_refined(Index t) {
-  exposed_.erase(t);
-  maximal_.insert(t);
-  grid_->for_each_parent(t, [&](Index q) { maximal_.erase(q); });
-  grid_->for_each_child(t, [&](Index c) {
-    if (exposed_.insert(c) && new_exposed_) new_exposed_->push_back(c);
-  });
+  const Grid48::Family f = grid_->family(t);
+  const Index i = slot_[t];
+  Entry e;
+  Expiry x;
+  if (i != kInvalid) {
+    e = exposed_.entry[i];
+    if (carry_records_ && t == refine_target_) x = exposed_.expiry[i];
+    set_remove(exposed_, t);
+  } else {
+    e = entry_of(t);
+  }
+  set_add(maximal_, e, x);
+  for (int k = 0; k < f.num_parents; ++k)
+    if (slot_[f.parent[k]] != kInvalid) set_remove(maximal_, f.parent[k]);
+  for (int k = 0; k < f.num_children; ++k) {
+    const Index c = f.child[k];
+    if (slot_[c] != kInvalid) continue;
+    set_add(exposed_, entry_of(c), {});
+    if (new_exposed_) new_exposed_->push_back(c);
+  }
 }
 
+// t was maximal and is now unrefined: it moves to the exposed set (with its record when update_view
+// coarsens it because it is not wanted), parents left without a refined child become maximal, children
+// without a refined parent stop being exposed.
 void Grid48Front::on_coarsened(Index t) {
-  maximal_.erase(t);
-  exposed_.insert(t);
   const Grid48& g = *grid_;
-  g.for_each_parent(t, [&](Index q) {
-    bool leaf = true;
-    g.for_each_child(q, [&](Index c) { leaf = leaf && !refined_[c]; });
-    if (leaf && maximal_.insert(q) && new_maximal_) new_maximal_->push_back(q);
-  });
-  g.for_each_child(t, [&](Index c) {
-    bool exposed = false;
-    g.for_each_parent(c, [&](Index q) { exposed = exposed || refined_[q]; });
-    if (!exposed) exposed_.erase(c);
-  });
+  const Grid48::Family f = g.family(t);
+  const Index i = slot_[t];
+  Entry e;
+  Expiry x;
+  if (i != kInvalid) {
+    e = maximal_.entry[i];
+    if (carry_records_) x = maximal_.expiry[i];
+    set_remove(maximal_, t);
+  } else {
+    e = entry_of(t);
+  }
+  set_add(exposed_, e, x);
+  for (int k = 0; k < f.num_parents; ++k) {
+    const Index q = f.parent[k];
+    if (slot_[q] != kInvalid) continue;
+    if (g.has_refined_child(q, refined_.data())) continue;
+    set_add(maximal_, entry_of(q), {});
+    if (new_maximal_) new_maximal_->push_back(q);
+  }
+  for (int k = 0; k < f.num_children; ++k) {
+    const Index c = f.child[k];
+    if (slot_[c] == kInvalid) continue;
+    // c's parents are t (now unrefined) and its mirror image through c.
+    if (f.co_parent[k] == kInvalid || !refined_[f.co_parent[k]]) set_remove(exposed_, c);
+  }
+}
+
+void Grid48Front::coarsen_unchecked(Index p) {
+  if (!sets_valid_) rebuild_sets();
+  refined_[p] = 0;
+  touched_valid_ = false;
+  on_coarsened(p);
+  --num_refined_;
+  num_faces_ -= static_cast<std::size_t>(grid_->num_triangles(p));
 }
 
 void Grid48Front::coarsen_one(Index p) {
@@ -1117,12 +1349,7 @@ void Grid48Front::coarsen_one(Index p) {
     throw InvalidInput("Grid48Front::coarsen_one: diamond " + std::to_string(p) +
                            (refined_[p] ? " has a refined child" : " is not refined"),
                        p);
-  if (!sets_valid_) rebuild_sets();
-  refined_[p] = 0;
-  touched_valid_ = false;
-  on_coarsened(p);
-  --num_refined_;
-  num_faces_ -= static_cast<std::size_t>(grid_->num_triangles(p));
+  coarsen_unchecked(p);
 }
 
 void Grid48Front::validate() const {

@@ -21,9 +21,9 @@
 ///
 /// Memory: 12 bytes per lattice point (error and height side by side in one 8-byte record, since the descent
 /// reads both of a point at once; radius apart), plus a histogram of the errors (about 6 KB at most) that
-/// bounds the output size of an object-error extraction. A front adds up to 21 bytes per lattice point
-/// (refined flags, its boundary sets' positions, the touched list, the vertex maps of to_mesh and
-/// extract_mesh, each allocated on first use) plus its boundary sets (40 bytes per boundary diamond).
+/// bounds the output size of an object-error extraction. A front adds up to 17 bytes per lattice point
+/// (refined flags, one slot shared by its two boundary sets, the touched list, the vertex maps of to_mesh
+/// and extract_mesh, each allocated on first use) plus its boundary sets (24 bytes per boundary diamond).
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -122,6 +122,19 @@ class Grid48 {
   /// Faces node p removes: 2, or 1 on the lattice border.
   int num_triangles(Index p) const noexcept;
 
+  /// The parents and children of node p (those of for_each_parent and for_each_child), computed together,
+  /// and for each child its other parent (kInvalid if it has only p): in the 4-8 lattice the two parents
+  /// of a diamond are mirror images through it, so it is 2 c - p when that lies in the lattice. O(1).
+  struct Family {
+    Index parent[2];
+    Index child[4];
+    Index co_parent[4];
+    int num_parents = 0, num_children = 0;
+  };
+  Family family(Index p) const noexcept;
+  /// Whether some child c of node p has refined[c] != 0.
+  bool has_refined_child(Index p, const std::uint8_t* refined) const noexcept;
+
   /// Bytes held by the hierarchy's arrays.
   std::size_t memory_bytes() const noexcept;
   /// The same hierarchy as an explicit Mt (for tests and metrics; grows ~100 bytes per sample). Vertex v of
@@ -141,6 +154,8 @@ class Grid48 {
     float z;
   };
   const PointRecord* records() const noexcept { return records_.data(); }
+  /// Node radii, per lattice point (for prefetching; radius(p) reads the same array).
+  const float* radii() const noexcept { return radius_.data(); }
 
  private:
   void compute_errors();
@@ -221,9 +236,13 @@ class Grid48Front {
   /// Frame-to-frame update for a moving camera: the same state update(front, v.to_query()) reaches (which
   /// is extract()'s), but a boundary diamond is re-evaluated only when the camera has moved enough since
   /// its last evaluation to possibly change its status. Each evaluation stores a slack: how far the eye may
-  /// translate (and the view rotate, scaled by the diamond's distance) before the frustum test or the
-  /// screen-error test can flip. When the viewport, pixels, field of view, aspect, clipping distances or
-  /// object error change, it re-evaluates everything. Costs 36 bytes per boundary diamond of extra state.
+  /// translate (and the view rotate, scaled by the diamond's distance) before the status can flip (a
+  /// diamond stays unwanted while it stays outside the frustum *or* fine on screen), split into a
+  /// translation and a rotation budget in proportion to the last frame's motion. When the viewport, pixels,
+  /// field of view, aspect, clipping distances or object error change, it re-evaluates everything. A
+  /// diamond the update refines (coarsens) because it is (not) wanted keeps its record in its new set.
+  /// Costs 24 bytes per boundary diamond (the record and a copy of the diamond's bound) and 4 per lattice
+  /// point.
   QueryStats update_view(const ViewQuery& v);
   /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
   template <class Fn> void for_each_triangle(Fn&& fn) const;
@@ -275,67 +294,63 @@ class Grid48Front {
 
   // The boundary of the refined set, kept up to date by refine/coarsen_one so that update() touches only
   // it: exposed diamonds (unrefined, with a refined parent or a tile centre: exactly the hypotenuse
-  // midpoints of current triangles) and maximal diamonds (refined, no refined child). Index sets with a
-  // position per lattice point. extract_fast leaves them stale; they are rebuilt on first use.
-  // Per boundary diamond, for update_view: the slack of its last evaluation, its distance term, and the
-  // accumulated camera translation and rotation at that evaluation (slack < 0: never evaluated).
-  struct Slack {
-    float slack = -1.0f, rho = 0.0f, t0 = 0.0f, r0 = 0.0f;
+  // midpoints of current triangles) and maximal diamonds (refined, no refined child). extract_fast leaves
+  // them stale; they are rebuilt on first use. The two sets are disjoint (one holds unrefined diamonds,
+  // the other refined ones), so one slot per lattice point serves both: slot_[p] is p's index in exposed_
+  // if p is unrefined, in maximal_ if p is refined, kInvalid if p is in neither.
+  //
+  // Per boundary diamond, for update_view: when its last evaluation expires. The status it recorded cannot
+  // change while the accumulated camera translation stays below `moved` and the accumulated rotation below
+  // `turned` (both -1: never evaluated, or the record does not hold for the diamond's current set).
+  struct Expiry {
+    float moved = -1.0f, turned = -1.0f;
   };
-  // A copy of the diamond's bound, so that update_view evaluates a stale diamond from the set's own
-  // (sequentially scanned) arrays instead of three random reads of the hierarchy.
-  struct Geo {
-    glm::vec3 centre{};
-    float radius = 0.0f, error = 0.0f;
+  // A boundary diamond and a copy of its bound (the centre's x and y follow from the point), so that
+  // update_view evaluates a stale diamond from the set's own arrays instead of random reads of the
+  // hierarchy. 16 bytes: four to a cache line.
+  struct Entry {
+    Index point = kInvalid;
+    float z = 0.0f, radius = 0.0f, error = 0.0f;
   };
-  struct IndexSet {
-    const Grid48* grid = nullptr;
-    std::vector<Index> items;
-    std::vector<Slack> slack;  // parallel to items: scanned sequentially by update_view
-    std::vector<Geo> geo;      // parallel to items: read for stale items only
-    std::vector<Index> pos;
-    void reset(const Grid48& g) {
-      grid = &g;
-      items.clear();
-      slack.clear();
-      geo.clear();
-      pos.assign(g.num_points(), kInvalid);
-    }
-    bool insert(Index p) {
-      if (pos[p] != kInvalid) return false;
-      pos[p] = static_cast<Index>(items.size());
-      items.push_back(p);
-      slack.push_back({});
-      geo.push_back({grid->position(p), grid->radius(p), grid->error(p)});
-      return true;
-    }
-    void erase(Index p) {
-      const Index i = pos[p];
-      if (i == kInvalid) return;
-      const Index last = items.back();
-      items[i] = last;
-      slack[i] = slack.back();
-      geo[i] = geo.back();
-      pos[last] = i;
-      items.pop_back();
-      slack.pop_back();
-      geo.pop_back();
-      pos[p] = kInvalid;
+  struct BoundarySet {
+    std::vector<Expiry> expiry;  // scanned sequentially by update_view every frame (8 bytes per diamond)
+    std::vector<Entry> entry;    // parallel: read for stale diamonds, moved between the sets
+    std::size_t size() const noexcept { return entry.size(); }
+    void clear() {
+      expiry.clear();
+      entry.clear();
     }
   };
-  mutable IndexSet exposed_, maximal_;
-  // During update_view: where on_refined / on_coarsened report diamonds newly added to the sets.
+  mutable BoundarySet exposed_, maximal_;
+  mutable std::vector<Index> slot_;
+  // During update_view: where on_refined / on_coarsened report diamonds newly added to the sets, and
+  // whether a diamond moving from one set to the other keeps its record (update_view refines only diamonds
+  // it found wanted and coarsens only ones it found unwanted, so their records stay true in the other set).
   std::vector<Index>* new_exposed_ = nullptr;
   std::vector<Index>* new_maximal_ = nullptr;
+  bool carry_records_ = false;
   mutable bool sets_valid_ = false;
 
   bool view_valid_ = false;
   ViewQuery last_view_{};
-  float moved_ = 0.0f, turned_ = 0.0f;
-  bool evaluate_view(const Geo& d, const ViewQuery& v, const Frustum& fr, float scale, Slack& s);
+  // Accumulated camera translation and rotation (radians) since the last full re-evaluation, and the last
+  // frame's increments (used to split each diamond's slack between the two).
+  double moved_ = 0.0, turned_ = 0.0;
+  float step_moved_ = 0.0f, step_turned_ = 0.0f;
+  struct ViewContext;
+  Entry entry_of(Index p) const noexcept { return {p, grid_->height_at(p), grid_->radius(p), grid_->error(p)}; }
+  void set_add(BoundarySet& s, const Entry& e, Expiry x) const;
+  void set_remove(BoundarySet& s, Index p) const;
   void rebuild_sets() const;
   void on_refined(Index t);
   void on_coarsened(Index t);
+  void coarsen_unchecked(Index p);
+  std::size_t scan_stale(BoundarySet& s, const ViewContext& cx, bool pick, std::vector<Index>& out);
+  void prefetch_refine(Index p) const;
+  void prefetch_entry(const BoundarySet& s, Index p) const;
+  void prefetch_coarsen(Index p) const;
+  Index refine_target_ = kInvalid;  // the diamond the running refine() was asked for
+  std::vector<Index> view_work_, view_new_, view_stale_;  // update_view scratch
 };
 
 // ---- inline implementation -------------------------------------------------------------------------
@@ -408,6 +423,81 @@ void Grid48::for_each_child(Index p, Fn&& fn) const {
   }
 }
 
+inline Grid48::Family Grid48::family(Index p) const noexcept {
+  Family f;
+  const std::uint32_t w = static_cast<std::uint32_t>(lw_), h = static_cast<std::uint32_t>(lh_);
+  const std::uint32_t y = py(p), x = p - y * w;
+  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  // The child at offset (dx, dy) and its other parent at twice that offset. Coordinates are unsigned: a
+  // negative one wraps to a value >= w (or h), so one comparison tests both ends.
+  std::uint32_t dx[4], dy[4];
+  int n = 0;
+  if (lx == ly) {  // square diamond of size d (see for_each_parent and for_each_child)
+    const std::uint32_t d = 1u << lx;
+    if (2 * d != tile_) {
+      const std::uint32_t cx = (((x - d) >> (lx + 1)) & 1u) != 0 ? x - d : x + d;
+      const std::uint32_t cy = (((y - d) >> (lx + 1)) & 1u) != 0 ? y - d : y + d;
+      f.parent[0] = cy * w + (2 * x - cx);
+      f.parent[1] = (2 * y - cy) * w + cx;
+      f.num_parents = 2;
+    }
+    dx[0] = 0u - d, dy[0] = 0u;
+    dx[1] = d, dy[1] = 0u;
+    dx[2] = 0u, dy[2] = 0u - d;
+    dx[3] = 0u, dy[3] = d;
+    n = 4;
+  } else {
+    const int ld = lx < ly ? lx : ly;
+    const std::uint32_t d = 1u << ld;
+    if (lx < ly) {
+      if (y >= d) f.parent[f.num_parents++] = p - d * w;
+      if (y + d < h) f.parent[f.num_parents++] = p + d * w;
+    } else {
+      if (x >= d) f.parent[f.num_parents++] = p - d;
+      if (x + d < w) f.parent[f.num_parents++] = p + d;
+    }
+    if (ld > 0) {
+      const std::uint32_t e = d >> 1;
+      dx[0] = 0u - e, dy[0] = 0u - e;
+      dx[1] = e, dy[1] = 0u - e;
+      dx[2] = 0u - e, dy[2] = e;
+      dx[3] = e, dy[3] = e;
+      n = 4;
+    }
+  }
+  for (int k = 0; k < n; ++k) {
+    const std::uint32_t cx = x + dx[k], cy = y + dy[k];
+    if (cx >= w || cy >= h) continue;
+    const std::uint32_t ox = cx + dx[k], oy = cy + dy[k];
+    f.child[f.num_children] = cy * w + cx;
+    f.co_parent[f.num_children++] = ox < w && oy < h ? oy * w + ox : kInvalid;
+  }
+  return f;
+}
+
+inline bool Grid48::has_refined_child(Index p, const std::uint8_t* refined) const noexcept {
+  const std::uint32_t w = static_cast<std::uint32_t>(lw_), h = static_cast<std::uint32_t>(lh_);
+  const std::uint32_t y = py(p), x = p - y * w;
+  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  if (lx == ly) {  // square: the four side midpoints, always in the lattice
+    const std::uint32_t d = 1u << lx;
+    return (refined[p - d] | refined[p + d] | refined[p - d * w] | refined[p + d * w]) != 0;
+  }
+  const int ld = lx < ly ? lx : ly;
+  if (ld == 0) return false;
+  const std::uint32_t e = 1u << (ld - 1);
+  bool any = false;
+  if (y >= e) {
+    if (x >= e) any |= refined[p - e * w - e] != 0;
+    if (x + e < w) any |= refined[p - e * w + e] != 0;
+  }
+  if (y + e < h) {
+    if (x >= e) any |= refined[p + e * w - e] != 0;
+    if (x + e < w) any |= refined[p + e * w + e] != 0;
+  }
+  return any;
+}
+
 inline int Grid48::num_triangles(Index p) const noexcept {
   int n = 0;
   const std::size_t y = py(p), x = p - y * lw_;
@@ -435,6 +525,7 @@ template <class Sink>
 void Grid48Front::refine(Index p, Sink&& sink) {
   if (refined_[p]) return;
   if (!sets_valid_) rebuild_sets();
+  refine_target_ = p;
   stack_.clear();
   stack_.push_back(p);
   while (!stack_.empty()) {
@@ -444,12 +535,13 @@ void Grid48Front::refine(Index p, Sink&& sink) {
       continue;
     }
     bool pushed = false;
-    grid_->for_each_parent(t, [&](Index q) {
-      if (!refined_[q]) {
-        stack_.push_back(q);
+    const Grid48::Family f = grid_->family(t);
+    for (int k = 0; k < f.num_parents; ++k) {
+      if (!refined_[f.parent[k]]) {
+        stack_.push_back(f.parent[k]);
         pushed = true;
       }
-    });
+    }
     if (!pushed) {
       stack_.pop_back();
       refined_[t] = 1;
@@ -511,13 +603,13 @@ void Grid48Front::for_each_triangle(Fn&& fn) const {
 template <class Fn>
 void Grid48Front::for_each_refine_candidate(Fn&& fn) const {
   if (!sets_valid_) rebuild_sets();
-  for (Index p : exposed_.items) fn(p);
+  for (const Entry& e : exposed_.entry) fn(e.point);
 }
 
 template <class Fn>
 void Grid48Front::for_each_coarsen_candidate(Fn&& fn) const {
   if (!sets_valid_) rebuild_sets();
-  for (Index p : maximal_.items) fn(p);
+  for (const Entry& e : maximal_.entry) fn(e.point);
 }
 
 }  // namespace varmesh

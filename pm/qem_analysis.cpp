@@ -3,7 +3,9 @@
 // P. Heckbert, "Surface simplification using quadric error metrics", SIGGRAPH 1997 (GH97) and the 1998
 // colour extension (GH98); H. Hoppe, "View-dependent refinement of progressive meshes", SIGGRAPH 1997 (the
 // fn0..fn3 details); J. Xia, A. Varshney, "Dynamic view-dependent simplification for polygonal models",
-// Visualization 1996 (the stored 1-ring); H. Hoppe et al., "Mesh optimization", 1993 (link condition).
+// Visualization 1996 (the stored 1-ring); H. Hoppe et al., "Mesh optimization", 1993 (link condition);
+// P. Lindstrom, G. Turk, "Fast and memory efficient polygonal simplification", Visualization 1998 (LT98) and
+// "Evaluation of memoryless simplification", TVCG 1999 (the CollapseCost::kLindstromTurk option).
 //
 // Faces keep their original corners (leaves) and carry current corners (nodes); a collapse relabels the
 // faces around vt and vu to vs, so the cut vertices' leaves vl^, vr^ are read off the two faces that die.
@@ -51,10 +53,79 @@ NormalCone enclose_normal(const NormalCone& a, const glm::vec3& n) noexcept {
   return {axis, std::cos(half) - 1e-6f};
 }
 
+// Lindstrom-Turk placement (P. Lindstrom, G. Turk, "Fast and memory efficient polygonal simplification",
+// Visualization 1998, section 3; "Evaluation of memoryless simplification", TVCG 1999): vs is fixed by up
+// to three linear constraints a.x = b, taken in order from the volume and boundary preservation conditions
+// and then from the minimisers of the volume, boundary and shape objectives. Each objective x^T H x - 2 c.x
+// + k contributes, for each direction e of the null space of the constraints so far, the condition that its
+// derivative along e vanishes (H e).x = e.c: the exact minimiser within that null space. A constraint is
+// kept only if it is alpha-compatible with the previous ones (LT98 section 3.4, alpha = 1 degree): at an
+// angle of more than alpha with the first, or with the plane of the first two.
+class LtConstraints {
+ public:
+  // x^T H x for H given by its rows.
+  static double quadratic(const glm::dvec3& h0, const glm::dvec3& h1, const glm::dvec3& h2, const glm::dvec3& x) noexcept {
+    return x.x * glm::dot(h0, x) + x.y * glm::dot(h1, x) + x.z * glm::dot(h2, x);
+  }
+
+  int size() const noexcept { return n_; }
+  void add(const glm::dvec3& a, double b) noexcept {
+    if (n_ == 3) return;
+    const double aa = glm::dot(a, a);
+    if (!(aa > 0.0) || !std::isfinite(aa) || !std::isfinite(b)) return;
+    if (n_ == 1) {
+      const double d = glm::dot(a, a_[0]);
+      if (!(d * d < kCos2 * aa * glm::dot(a_[0], a_[0]))) return;
+    } else if (n_ == 2) {
+      const glm::dvec3 m = glm::cross(a_[0], a_[1]);
+      const double d = glm::dot(a, m);
+      if (!(d * d > kSin2 * aa * glm::dot(m, m))) return;
+    }
+    a_[n_] = a, b_[n_] = b, ++n_;
+  }
+  // Objective x^T H x - 2 c.x + k, H symmetric given by its rows h0, h1, h2.
+  void add_objective(const glm::dvec3& h0, const glm::dvec3& h1, const glm::dvec3& h2, const glm::dvec3& c) noexcept {
+    auto along = [&](const glm::dvec3& e) {
+      add(h0 * e.x + h1 * e.y + h2 * e.z, glm::dot(e, c));
+    };
+    if (n_ == 0) {
+      along({1, 0, 0}), along({0, 1, 0}), along({0, 0, 1});
+    } else if (n_ == 1) {
+      const glm::dvec3 u = glm::normalize(a_[0]);
+      const glm::dvec3 t = std::abs(u.x) < 0.6 ? glm::dvec3(1, 0, 0)
+                           : std::abs(u.y) < 0.6 ? glm::dvec3(0, 1, 0)
+                                                  : glm::dvec3(0, 0, 1);
+      const glm::dvec3 e1 = glm::normalize(glm::cross(u, t));
+      const glm::dvec3 e2 = glm::cross(u, e1);
+      along(e1);
+      along(e2);  // may see n_ == 2 now: the compatibility test against both constraints then applies
+    } else if (n_ == 2) {
+      along(glm::normalize(glm::cross(a_[0], a_[1])));
+    }
+  }
+  // The point the three constraints define (Cramer); false with fewer constraints.
+  bool solve(glm::dvec3& x) const noexcept {
+    if (n_ < 3) return false;
+    const glm::dvec3 c12 = glm::cross(a_[1], a_[2]);
+    const double det = glm::dot(a_[0], c12);
+    if (!(std::abs(det) > 0.0)) return false;
+    x = (b_[0] * c12 + b_[1] * glm::cross(a_[2], a_[0]) + b_[2] * glm::cross(a_[0], a_[1])) / det;
+    return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z);
+  }
+
+ private:
+  static constexpr double kCos2 = 0.99969541350954794;   // cos^2(1 degree)
+  static constexpr double kSin2 = 3.0458649045213e-4;    // sin^2(1 degree)
+  glm::dvec3 a_[3];
+  double b_[3] = {0, 0, 0};
+  int n_ = 0;
+};
+
 // Costs and legality are recomputed only where they can change. A candidate's cost depends only on its two
 // ends' quadrics and positions, so a candidate edge stays valid until one of its ends dies: then it is
 // erased from the indexed heap, and the edges of vs are the only new costs. A rejected edge leaves the heap
-// and comes back, cost unchanged, when the neighbourhood of one of its ends changes.
+// and comes back, cost unchanged, when the neighbourhood of one of its ends changes. (Lindstrom-Turk costs
+// read the current faces around both ends instead: there a collapse re-costs every edge at a neighbour of vs.)
 //
 // The working state is per slot, not per node: a collapse (a, b) puts vs in a's slot and frees b's, and
 // node_of_ maps a slot to the hierarchy node it holds now. Node ids grow in collapse order (spatially
@@ -105,6 +176,8 @@ class Analysis {
     const double len = glm::length(n);
     fnormal_[f] = len > 0.0 ? n / len : glm::dvec3(0.0);
   }
+  // fplane_[f] from the current corners and their (unnormalised) normal n.
+  void set_plane(Index f, const glm::dvec3& n) { fplane_[f] = glm::dvec4(n, glm::dot(n, geo_[cur_[3 * f]].p)); }
   const Index* faces_begin(Index v) const { return fpool_.data() + fadj_[v].off; }
   const Index* faces_end(Index v) const { return fpool_.data() + fadj_[v].off + fadj_[v].cnt; }
   const EdgeRef* edges_begin(Index v) const { return epool_.data() + eadj_[v].off; }
@@ -112,6 +185,7 @@ class Analysis {
   std::uint64_t tie_key(const Edge& e) const { return (std::uint64_t{node_of_[e.a]} << 32) | node_of_[e.b]; }
 
   Placement place(Index a, Index b) const;
+  Placement place_lt(Index a, Index b) const;
   void set_edge(Index e, Index a, Index b);
   void reinsert_edges_of(Index v);
   // What check() finds on its way for the collapse that follows: the edge's faces and apexes, Hoppe's
@@ -145,6 +219,7 @@ class Analysis {
   std::vector<Geo> geo_;
   std::vector<AttributeQuadric> aq_;
   bool colors_ = false;
+  bool lt_ = false;  // Lindstrom-Turk costs and placement (QemOptions::cost)
   std::vector<Run> fadj_;                   // per node: its live faces (only live nodes' runs are kept up to date)
   std::vector<Index> fpool_;
   std::vector<Run> eadj_;                   // per node: its candidate edges
@@ -153,6 +228,7 @@ class Analysis {
   detail::EdgeHeap heap_;                   // edges awaiting a verdict
   std::vector<Index> cur_;                  // current corners per face
   std::vector<glm::dvec3> fnormal_;         // per face: unit normal of the current corners
+  std::vector<glm::dvec4> fplane_;          // per face, Lindstrom-Turk only: (n, n.c0), n = (c1 - c0) x (c2 - c0)
   std::vector<std::uint8_t> alive_;         // per face
   std::vector<std::uint8_t> node_alive_;    // per node: in the current mesh
   std::vector<std::uint8_t> border_;        // per node: its dual piece touches the border
@@ -172,6 +248,7 @@ class Analysis {
 };
 
 Analysis::Placement Analysis::place(Index a, Index b) const {
+  if (lt_) return place_lt(a, b);
   Placement out{};
   if (colors_) {
     const AttributeQuadric q = aq_[a] + aq_[b];
@@ -186,6 +263,97 @@ Analysis::Placement Analysis::place(Index a, Index b) const {
     out.cost = o.error;
   }
   return out;
+}
+
+// LT98 on the current mesh: T = the faces around a or b (fl and fr included), B = their border edges with an
+// end at a or b. Volume of the tetrahedron (x, t0, t1, t2) = (n_t.x - n_t.t0) / 6 with n_t = (t1 - t0) x
+// (t2 - t0); the area vector of triangle (x, p, q) for a border edge p -> q is ((q - p) x x + p x q) / 2.
+// Cost (LT99): 1/2 sum of squared volumes + 1/2 L^2 sum of squared border areas, L the edge length.
+Analysis::Placement Analysis::place_lt(Index a, Index b) const {
+  // Local coordinates centred on a: the objectives' constant terms do not swamp their minima.
+  const glm::dvec3 o = geo_[a].p;
+  auto pos = [&](Index v) { return geo_[v].p - o; };
+  glm::dvec3 nsum(0.0), hv0(0.0), hv1(0.0), hv2(0.0), cv(0.0);
+  double dsum = 0.0, kv = 0.0;
+  // The cached planes (one load per face instead of four): n.(c0 - o) = w - n.o.
+  auto add_face = [&](Index f) {
+    const glm::dvec4& pl = fplane_[f];
+    const glm::dvec3 n(pl);
+    const double d = pl.w - glm::dot(n, o);
+    nsum += n, dsum += d, kv += d * d;
+    hv0 += n.x * n, hv1 += n.y * n, hv2 += n.z * n, cv += d * n;
+  };
+  for (const Index* it = faces_begin(a); it != faces_end(a); ++it) add_face(*it);
+  for (const Index* it = faces_begin(b); it != faces_end(b); ++it)
+    if (std::find(faces_begin(a), faces_end(a), *it) == faces_end(a)) add_face(*it);  // fl, fr once
+  // Border edges: a directed edge x -> y of a face of a or b, with x or y in {a, b}, whose twin y -> x is in
+  // no face of a or b (the twin would hold the same end).
+  glm::dvec3 e1sum(0.0), e2sum(0.0), hb0(0.0), hb1(0.0), hb2(0.0), cb(0.0);
+  double kb = 0.0;
+  bool has_border = false;
+  if (border_[a] || border_[b]) {
+    auto has_directed = [&](Index x, Index y) {
+      for (Index v : {a, b})
+        for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
+          for (int k = 0; k < 3; ++k)
+            if (cur_[3 * *it + k] == x && cur_[3 * *it + (k + 1) % 3] == y) return true;
+      return false;
+    };
+    for (Index v : {a, b})
+      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+        const Index f = *it;
+        if (v == b && (cur_[3 * f] == a || cur_[3 * f + 1] == a || cur_[3 * f + 2] == a)) continue;
+        for (int k = 0; k < 3; ++k) {
+          const Index x = cur_[3 * f + k], y = cur_[3 * f + (k + 1) % 3];
+          if (x != a && x != b && y != a && y != b) continue;
+          if (has_directed(y, x)) continue;
+          has_border = true;
+          const glm::dvec3 p = pos(x), q = pos(y);
+          const glm::dvec3 e = q - p, pq = glm::cross(p, q);
+          e1sum += e, e2sum += pq;
+          // |e x x + pq|^2 = x^T (|e|^2 I - e e^T) x - 2 (e x pq).x + |pq|^2
+          const double ee = glm::dot(e, e);
+          hb0 += glm::dvec3(ee, 0, 0) - e.x * e;
+          hb1 += glm::dvec3(0, ee, 0) - e.y * e;
+          hb2 += glm::dvec3(0, 0, ee) - e.z * e;
+          cb += glm::cross(e, pq);
+          kb += glm::dot(pq, pq);
+        }
+      }
+  }
+  LtConstraints lc;
+  lc.add(nsum, dsum);  // volume preservation
+  if (has_border) {    // boundary preservation: the summed area vector vanishes
+    const double ee = glm::dot(e1sum, e1sum);
+    const glm::dvec3 e = e1sum;
+    lc.add_objective(glm::dvec3(ee, 0, 0) - e.x * e, glm::dvec3(0, ee, 0) - e.y * e, glm::dvec3(0, 0, ee) - e.z * e,
+                     glm::cross(e1sum, e2sum));
+  }
+  lc.add_objective(hv0, hv1, hv2, cv);  // volume optimisation
+  if (has_border) lc.add_objective(hb0, hb1, hb2, cb);  // boundary optimisation
+  if (lc.size() < 3) {  // shape optimisation: the sum of squared edge lengths at vs
+    glm::dvec3 sum(0.0);
+    double m = 0.0;
+    for (const EdgeRef* e = edges_begin(a); e != edges_end(a); ++e)
+      if (e->to != b) sum += pos(e->to), m += 1.0;
+    for (const EdgeRef* e = edges_begin(b); e != edges_end(b); ++e) {
+      if (e->to == a) continue;
+      bool dup = false;
+      for (const EdgeRef* g = edges_begin(a); g != edges_end(a) && !dup; ++g) dup = g->to == e->to;
+      if (!dup) sum += pos(e->to), m += 1.0;
+    }
+    lc.add_objective({m, 0, 0}, {0, m, 0}, {0, 0, m}, sum);
+  }
+  glm::dvec3 x;
+  if (!lc.solve(x)) x = 0.5 * pos(b);
+  const double fv = LtConstraints::quadratic(hv0, hv1, hv2, x) - 2.0 * glm::dot(cv, x) + kv;
+  double cost = std::max(0.0, fv) / 36.0;
+  if (has_border) {
+    const double fb = LtConstraints::quadratic(hb0, hb1, hb2, x) - 2.0 * glm::dot(cb, x) + kb;
+    const glm::dvec3 d = pos(b);
+    cost += glm::dot(d, d) * std::max(0.0, fb) / 4.0;
+  }
+  return Placement{x + o, glm::dvec3(0.0), cost};
 }
 
 // Slot e becomes candidate (a, b), with its cost, in the heap; the caller fixes the nodes' runs.
@@ -338,6 +506,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       fpool_.push_back(f);
       const double len = glm::length(*n1);  // as update_normal() on the relabelled face
       fnormal_[f] = len > 0.0 ? *n1 / len : glm::dvec3(0.0);
+      if (lt_) set_plane(f, *n1);
       ++n1;
       const glm::dvec3& n = fnormal_[f];
       if (n == glm::dvec3(0.0) || cone.is_full()) continue;
@@ -397,6 +566,13 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     }
   eadj_[vs] = {static_cast<Index>(epool_.size()), static_cast<Index>(new_edges_.size())};
   epool_.insert(epool_.end(), new_edges_.begin(), new_edges_.end());
+  // Lindstrom-Turk costs are memoryless: they read the faces around both ends, and those of every neighbour
+  // of vs just changed, so every edge at a neighbour is re-costed (and comes back if it had been rejected).
+  // mark_ still holds the ring's stamp: an edge between two neighbours is re-costed from its lower slot.
+  if (lt_)
+    for (Index w : ring_)
+      for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
+        if (e->to != vs && (mark_[e->to] != stamp_ || w < e->to)) set_edge(e->edge, w, e->to);
 
   ElementBound bound;
   Sphere s = enclose(Sphere{raw_.bounds[na].center, raw_.bounds[na].radius}, Sphere{raw_.bounds[nb].center, raw_.bounds[nb].radius});
@@ -439,6 +615,10 @@ void Analysis::init_faces() {
     }
   fnormal_.resize(nf_);
   for (std::size_t f = 0; f < nf_; ++f) update_normal(static_cast<Index>(f));
+  if (lt_) {
+    fplane_.resize(nf_);
+    for (Index f = 0; f < nf_; ++f) set_plane(f, face_normal(f, kInvalid, glm::dvec3(0.0)));
+  }
 }
 
 void Analysis::init_edges() {
@@ -492,6 +672,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   center_ = glm::dvec3(box.center());
   scale_ = std::max(1e-30, static_cast<double>(box.diagonal()));
   colors_ = opt_.use_colors && !in_.colors.empty();
+  lt_ = opt_.cost == CollapseCost::kLindstromTurk && !colors_;
 
   // The hierarchy holds at most 2 nl - 1 nodes; the working state nl slots.
   const std::size_t max_nodes = 2 * nl_;

@@ -4,7 +4,8 @@
 ///
 /// Each step collapses the cheapest legal edge (vt, vu) into a new vertex vs placed at the quadric's
 /// minimiser (Quadric::optimal_on_segment: the linear solve when well conditioned, else the best point of
-/// the edge). Legal means:
+/// the edge). QemOptions::cost = CollapseCost::kLindstromTurk orders and places the collapses by
+/// Lindstrom-Turk's memoryless costs instead (lower error, slower: see CollapseCost). Legal means:
 /// - link condition: the common neighbours of vt and vu are exactly the apexes of the edge's faces (two, or
 ///   one on a border edge), and an interior edge does not join two border vertices (Hoppe et al. 1993);
 /// - no duplicate face appears (the tetrahedron case) and the component keeps at least 4 vertices;
@@ -17,9 +18,9 @@
 ///
 /// Node bounds for the view criteria: sphere = enclosing sphere of the children's spheres and vs's
 /// position (a leaf's sphere covers its incident faces); cone = merged cone of the children's cones and the
-/// normals of the faces around vs; error = max(children's errors, distance bound) where the distance bound
-/// is sqrt of vs's unit-weight plane quadric (an upper bound of the distance from vs to every original face
-/// plane in its region, GH97 section 5). All three are nested by construction.
+/// normals of the faces around vs; error = max(children's errors) + the largest distance from vs to the
+/// planes of the current faces around vt and vu, accumulated up the tree (a bound on how far the surface
+/// moved in vs's region). All three are nested by construction and do not depend on QemOptions::cost.
 #include <cstddef>
 #include <functional>
 #include <limits>
@@ -30,6 +31,21 @@
 
 namespace varmesh {
 
+/// How collapses are ordered and placed (QemOptions::cost).
+enum class CollapseCost {
+  /// Garland-Heckbert 1997: accumulated area-weighted plane quadrics (plus border constraint planes) of each
+  /// vertex's region; vs at the quadric minimiser. The product's method.
+  kQuadric,
+  /// Lindstrom-Turk 1998/1999 memoryless simplification: cost and placement from the current mesh only (the
+  /// faces around both ends): vs preserves the enclosed volume and the border's area vector, then minimises
+  /// the squared volumes swept by each face, the squared areas swept by each border edge, and edge lengths;
+  /// the cost is the volume term plus edge length^2 times the border term (border_penalty is not used).
+  /// Every collapse re-costs the edges of vs's neighbours: 3-4x the time of kQuadric. At 1 % of the faces
+  /// it halves the bunny's max error and cuts its RMS error by a third (vertex-to-surface distance).
+  /// Ignored (kQuadric is used) when colours are used.
+  kLindstromTurk,
+};
+
 struct QemOptions {
   /// Stop when this many vertices remain (0: no vertex target).
   std::size_t target_vertices = 0;
@@ -39,6 +55,8 @@ struct QemOptions {
   double max_error = std::numeric_limits<double>::infinity();
   /// With no target at all the analysis goes down to the smallest base mesh it can reach.
   double border_penalty = 1000.0;
+  /// Ordering and placement of the collapses. The node bounds do not depend on it.
+  CollapseCost cost = CollapseCost::kQuadric;
   bool use_colors = false;     ///< GH98 attribute quadrics when the input has colours
   double color_weight = 1.0;   ///< colour unit = color_weight * bounding-box diagonal
   NonManifoldPolicy non_manifold = NonManifoldPolicy::kSplit;

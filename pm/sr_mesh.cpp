@@ -95,12 +95,9 @@ SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), sche
   num_slots_ = static_cast<Index>(h.num_faces());
   faces_.assign(num_slots_, {});
   nodes_.assign(h.num_nodes(), {});
-  state_.assign(h.num_nodes(), std::uint8_t{0});
-  mark_.assign(h.num_nodes(), 0);
-  in_progress_.assign(h.num_nodes(), 0);
+  // mark_ (long rings only) is sized on first use; in_progress_ serves the Xia-Varshney rule only.
+  if (scheme == RefinementScheme::kXiaVarshney) in_progress_.assign(h.num_nodes(), 0);
   vu_of_vt_.assign(h.num_nodes(), kInvalid);
-  keys_.assign(h.num_nodes(), {});
-  for (std::size_t v = 0; v < h.num_nodes(); ++v) keys_[v] = h.key(static_cast<Index>(v)).value;
   for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
     const CollapseRecord& r = h.record(static_cast<Index>(v));
     vu_of_vt_[r.vt] = r.vu;
@@ -122,11 +119,23 @@ SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), sche
   }
   if (next != num_slots_) throw std::logic_error("SrMesh: faces neither in the base mesh nor created by a collapse");
   splits_.assign(h.num_collapses(), {});
+  // Split::nl/nr: replaying the collapses in order with a union-find (path halving), the set of a leaf is
+  // its ancestor that is active between the collapse creating node v - 1 and the one creating v, which
+  // is the mesh just before the split of v in decreasing node order.
+  std::vector<Index> uf(h.num_nodes());
+  for (std::size_t v = 0; v < uf.size(); ++v) uf[v] = static_cast<Index>(v);
+  const auto find = [&](Index x) {
+    while (uf[x] != x) x = uf[x] = uf[uf[x]];
+    return x;
+  };
   for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
     const CollapseRecord& r = h.record(static_cast<Index>(v));
     const auto slot = [&](Index f) { return f == kInvalid ? kInvalid : slot_of_[f]; };
-    const auto key = [&](Index leaf) { return leaf == kInvalid ? std::uint64_t{0} : keys_[leaf]; };
-    splits_[v - h.num_leaves()] = Split{r.vt, r.vu, slot(r.fl_hat), slot(r.fr_hat), key(r.vl_hat), key(r.vr_hat)};
+    const auto key = [&](Index leaf) { return leaf == kInvalid ? std::uint64_t{0} : h.key(leaf).value; };
+    const auto cut = [&](Index leaf) { return leaf == kInvalid ? kInvalid : find(leaf); };
+    splits_[v - h.num_leaves()] =
+        Split{r.vt, r.vu, slot(r.fl_hat), slot(r.fr_hat), cut(r.vl_hat), cut(r.vr_hat), key(r.vl_hat), key(r.vr_hat)};
+    uf[r.vt] = uf[r.vu] = static_cast<Index>(v);
   }
   active_list_.reserve(h.num_leaves());
   for (Ring* ring : {&ring_, &ring2_}) ring->buf.resize(2 * kRingStart);
@@ -168,15 +177,13 @@ void SrMesh::build_base() {
 }
 
 void SrMesh::reset() {
-  // Back to the base mesh saved by build_base(). Only active nodes have a non-default NodeSlot.
+  // Back to the base mesh saved by build_base().
   ecn_for_ = kInvalid;
-  for (Index v : active_list_) nodes_[v] = NodeSlot{};
+  std::fill(nodes_.begin(), nodes_.end(), NodeSlot{});
   active_list_.clear();
   std::fill(faces_.begin(), faces_.end(), FaceSlot{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}});
-  std::fill(state_.begin(), state_.end(), std::uint8_t{0});
   const auto roots = h_->roots();
   for (std::size_t i = 0; i < roots.size(); ++i) {
-    state_[roots[i]] = 1;
     activate(roots[i]);
     nodes_[roots[i]].corner = base_corners_[i];
   }
@@ -194,14 +201,12 @@ void SrMesh::check_node(Index v, const char* what) const {
 // lo), one step of each per call: the ring is a chain of dependent loads, and two chains halve its latency
 // (four when two rings are walked together). An open fan ends with both walks on the border, which leaves
 // it in order from its clockwise end.
-void SrMesh::ring_begin(Index start, Ring& ring, bool prefetch_keys) const {
+void SrMesh::ring_begin(Index start, Ring& ring) const {
   ring.lo = ring.buf.size() / 2;
   ring.hi = ring.lo + 1;
   ring.buf[ring.lo] = ring.fwd = ring.back = start;
   ring.fwd_open = ring.back_open = true;
   ring.closed = false;
-  ring.prefetch_keys = prefetch_keys;
-  if (prefetch_keys) prefetch_line(&keys_[head(start)]);
 }
 
 inline bool SrMesh::ring_step(Ring& ring) const {
@@ -214,7 +219,6 @@ inline bool SrMesh::ring_step(Ring& ring) const {
       ring.fwd_open = false;
     } else {
       buf[ring.hi++] = ring.fwd = n;
-      if (ring.prefetch_keys) prefetch_line(&keys_[head(n)]);
     }
   }
   if (ring.back_open) {
@@ -226,7 +230,6 @@ inline bool SrMesh::ring_step(Ring& ring) const {
       ring.back_open = false;
     } else {
       buf[--ring.lo] = ring.back = p;
-      if (ring.prefetch_keys) prefetch_line(&keys_[head(p)]);
     }
   }
   if (!ring.fwd_open && !ring.back_open) return true;
@@ -243,15 +246,15 @@ inline bool SrMesh::ring_step(Ring& ring) const {
   return false;
 }
 
-void SrMesh::gather_ring(Index start, Ring& ring, bool prefetch_keys) const {
-  ring_begin(start, ring, prefetch_keys);
+void SrMesh::gather_ring(Index start, Ring& ring) const {
+  ring_begin(start, ring);
   while (!ring_step(ring)) {
   }
 }
 
 void SrMesh::gather_rings(Index start_a, Ring& a, Index start_b, Ring& b) const {
-  ring_begin(start_a, a, false);
-  ring_begin(start_b, b, false);
+  ring_begin(start_a, a);
+  ring_begin(start_b, b);
   bool done_a = false, done_b = false;
   while (!done_a || !done_b) {
     if (!done_a) done_a = ring_step(a);
@@ -261,7 +264,7 @@ void SrMesh::gather_rings(Index start_a, Ring& a, Index start_b, Ring& b) const 
 
 Index SrMesh::active_ancestor(Index leaf) const noexcept {
   Index a = leaf;
-  while (a != kInvalid && state_[a] != 1) a = h_->parent(a);
+  while (a != kInvalid && !node_active(a)) a = h_->parent(a);
   return a;
 }
 
@@ -333,9 +336,8 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
     nodes_[r.vt].corner = he(fr, 1);
   }
   nodes_[vs].corner = kInvalid;
-  state_[vs] = 2;
-  state_[r.vt] = state_[r.vu] = 1;
   deactivate(vs);
+  nodes_[vs].active_pos = kRefinedPos;
   activate(r.vt);
   activate(r.vu);
   ++num_active_;
@@ -367,7 +369,9 @@ void SrMesh::do_ecol(Index vs) {
     const Index x_next = x != kInvalid ? (x & ~Index{3}) | next_corner(x & 3) : kInvalid;
     const Index y_next = y != kInvalid ? (y & ~Index{3}) | next_corner(y & 3) : kInvalid;
     if (keep == kInvalid) keep = x != kInvalid ? x_next : y;
-    if (nodes_[apex].corner >> 2 == f) nodes_[apex].corner = x != kInvalid ? x : y_next;
+    // The apex may have its corner in f: give it x (or y's next), which leave it. Written without testing
+    // the old corner: a store that misses the cache does not stall the collapse, a load would.
+    nodes_[apex].corner = x != kInvalid ? x : y_next;
     fs = FaceSlot{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}};
     --num_faces_;
   };
@@ -378,8 +382,6 @@ void SrMesh::do_ecol(Index vs) {
   if (keep == kInvalid) throw std::logic_error("SrMesh: ecol of node " + std::to_string(vs) + " leaves it without a face");
   nodes_[vs].corner = keep;
   nodes_[r.vt].corner = nodes_[r.vu].corner = kInvalid;
-  state_[vs] = 1;
-  state_[r.vt] = state_[r.vu] = 0;
   deactivate(r.vt);
   deactivate(r.vu);
   activate(vs);
@@ -418,6 +420,7 @@ bool SrMesh::extra_common_neighbors_walk(Index vs) const {
     }
     return false;
   }
+  if (mark_.empty()) mark_.assign(h_->num_nodes(), 0);
   ++stamp_;
   for (std::size_t i = 0; i < nt; ++i) mark_[ring_neighbor(ring_, i)] = stamp_;
   for (std::size_t i = 0; i < nu; ++i) {
@@ -436,14 +439,14 @@ bool SrMesh::hoppe_ecol_legal(Index vs) const {
 
 bool SrMesh::xv_ring_matches(Index vs) const {
   for (Index n : h_->stored_ring(vs))
-    if (state_[n] != 1) return false;
+    if (!node_active(n)) return false;
   return true;
 }
 
 bool SrMesh::can_ecol(Index vs) const {
-  if (vs >= h_->num_nodes() || h_->is_leaf(vs) || state_[vs] != 2) return false;
+  if (vs >= h_->num_nodes() || h_->is_leaf(vs) || !node_refined(vs)) return false;
   const Split& r = split_of(vs);
-  if (state_[r.vt] != 1 || state_[r.vu] != 1) return false;
+  if (!node_active(r.vt) || !node_active(r.vu)) return false;
   switch (scheme_) {
     case RefinementScheme::kKimLee: return !extra_common_neighbors(vs);
     case RefinementScheme::kHoppe97: return hoppe_ecol_legal(vs) && !extra_common_neighbors(vs);
@@ -477,22 +480,35 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
   prefetch_line(&nodes_[active_list_.back()]);
   if (r.fl != kInvalid) prefetch_line(&faces_[r.fl]);
   if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
-  const Leaf kl = has_l ? leaf_of(r.kl) : Leaf{}, kr = has_r ? leaf_of(r.kr) : Leaf{};
   for (;;) {
     ecn_for_ = kInvalid;  // ring_ is overwritten
-    gather_ring(nodes_[vs].corner, ring_, true);
+    gather_ring(nodes_[vs].corner, ring_);
     const std::size_t nn = ring_.size() + (ring_.closed ? 0 : 1);
     Index vl = kInvalid, vr = kInvalid;
     int pl = -1, pr = -1;
     if (nn <= kLongRing) {
-      // The cut vertices are the ring neighbours that are ancestors of vl^ and vr^ (the first found; the
-      // last place of that vertex is kept, as a physical split needs one place per cut vertex).
+      // The cut vertices are the ring neighbours that are ancestors of vl^ and vr^: at most one each, as
+      // the active nodes are never ancestors of one another. The last place of a cut vertex is kept, as a
+      // physical split needs one place per cut vertex. Split::nl/nr are such ancestors, so when one of them
+      // is in the ring it is the cut vertex (always in the PM order); otherwise the section 4.3 keys of the
+      // neighbours are tested.
       for (std::size_t i = 0; i < nn; ++i) {
         const Index n = ring_neighbor(ring_, i);
-        if (has_l && vl == kInvalid && is_ancestor(keys_[n], kl)) vl = n;
-        if (has_r && vr == kInvalid && is_ancestor(keys_[n], kr)) vr = n;
-        if (n == vl) pl = static_cast<int>(i);
-        if (n == vr) pr = static_cast<int>(i);
+        if (n == r.nl) pl = static_cast<int>(i);
+        if (n == r.nr) pr = static_cast<int>(i);
+      }
+      if (pl >= 0) vl = r.nl;
+      if (pr >= 0) vr = r.nr;
+      const bool need_l = has_l && vl == kInvalid, need_r = has_r && vr == kInvalid;
+      if (need_l || need_r) {
+        const Leaf kl = need_l ? leaf_of(r.kl) : Leaf{}, kr = need_r ? leaf_of(r.kr) : Leaf{};
+        for (std::size_t i = 0; i < nn; ++i) {
+          const Index n = ring_neighbor(ring_, i);
+          if (need_l && vl == kInvalid && is_ancestor(h_->key(n).value, kl)) vl = n;
+          if (need_r && vr == kInvalid && is_ancestor(h_->key(n).value, kr)) vr = n;
+          if (need_l && n == vl) pl = static_cast<int>(i);
+          if (need_r && n == vr) pr = static_cast<int>(i);
+        }
       }
     } else {
       // A high-valence vertex (the coarse side of an adaptive mesh): the one active ancestor of each leaf
@@ -522,11 +538,11 @@ bool SrMesh::vsplit_hoppe(Index target) {
   std::vector<Index> stack{target};
   while (!stack.empty()) {
     const Index v = stack.back();
-    if (state_[v] == 2) {
+    if (node_refined(v)) {
       stack.pop_back();
       continue;
     }
-    if (state_[v] == 0) {
+    if (node_below(v)) {
       stack.push_back(h_->parent(v));
       continue;
     }
@@ -547,21 +563,21 @@ bool SrMesh::vsplit_hoppe(Index target) {
     (void)dc;
     if (v != target) stats_.forced_vsplits += stats_.vsplits - before;
   }
-  return state_[target] == 2;
+  return node_refined(target);
 }
 
 bool SrMesh::make_active_xv(Index n, int depth) {
-  while (state_[n] == 0) {
+  while (node_below(n)) {
     Index a = h_->parent(n);
-    while (state_[a] == 0) a = h_->parent(a);
+    while (node_below(a)) a = h_->parent(a);
     if (!vsplit_xv(a, depth + 1)) return false;
     ++stats_.forced_vsplits;
   }
-  if (state_[n] == 2) {
+  if (node_refined(n)) {
     if (!ecol_xv(n, depth + 1)) return false;
     ++stats_.forced_ecols;
   }
-  return state_[n] == 1;
+  return node_active(n);
 }
 
 bool SrMesh::vsplit_xv(Index vs, int depth) {
@@ -573,7 +589,7 @@ bool SrMesh::vsplit_xv(Index vs, int depth) {
       ok = false;
       break;
     }
-  ok = ok && state_[vs] == 1 && xv_ring_matches(vs);
+  ok = ok && node_active(vs) && xv_ring_matches(vs);
   if (ok) vsplit_kim_lee(vs);
   in_progress_[vs] = 0;
   return ok;
@@ -585,7 +601,7 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
   const CollapseRecord& r = h_->record(vs);
   bool ok = true;
   for (Index c : {r.vt, r.vu})
-    if (ok && state_[c] == 2) {
+    if (ok && node_refined(c)) {
       ok = ecol_xv(c, depth + 1);
       if (ok) ++stats_.forced_ecols;
     }
@@ -595,7 +611,7 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
         ok = false;
         break;
       }
-  ok = ok && state_[vs] == 2 && state_[r.vt] == 1 && state_[r.vu] == 1 && xv_ring_matches(vs) && !extra_common_neighbors(vs);
+  ok = ok && node_refined(vs) && node_active(r.vt) && node_active(r.vu) && xv_ring_matches(vs) && !extra_common_neighbors(vs);
   if (ok) do_ecol(vs);
   in_progress_[vs] = 0;
   return ok;
@@ -603,7 +619,7 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
 
 bool SrMesh::vsplit(Index vs) {
   check_node(vs, "vsplit");
-  if (state_[vs] != 1) throw InvalidInput("vsplit: node " + std::to_string(vs) + " is not active");
+  if (!node_active(vs)) throw InvalidInput("vsplit: node " + std::to_string(vs) + " is not active");
   switch (scheme_) {
     case RefinementScheme::kKimLee: return vsplit_kim_lee(vs);
     case RefinementScheme::kHoppe97: return vsplit_hoppe(vs);
@@ -619,7 +635,7 @@ bool SrMesh::vsplit(Index vs) {
 bool SrMesh::ecol(Index vs) {
   check_node(vs, "ecol");
   const CollapseRecord& r = h_->record(vs);
-  if (state_[vs] != 2 || state_[r.vt] != 1 || state_[r.vu] != 1)
+  if (!node_refined(vs) || !node_active(r.vt) || !node_active(r.vu))
     throw InvalidInput("ecol: the children of node " + std::to_string(vs) + " are not both active");
   switch (scheme_) {
     case RefinementScheme::kKimLee:
@@ -649,23 +665,21 @@ bool SrMesh::ecol(Index vs) {
 }
 
 void SrMesh::refine_forced(Index e) {
-  while (state_[e] == 0) {
+  while (node_below(e)) {
     Index a = h_->parent(e);
-    while (state_[a] == 0) a = h_->parent(a);
+    while (node_below(a)) a = h_->parent(a);
     if (!vsplit(a)) return;
   }
-  if (state_[e] == 1) vsplit(e);
+  if (node_active(e)) vsplit(e);
 }
 
-void SrMesh::prefetch_fan(Index h, int steps, bool keys) const noexcept {
+void SrMesh::prefetch_fan(Index h, int steps) const noexcept {
   Index fwd = h, back = h;
   for (int i = 0; i < steps; ++i) {
     if (fwd != kInvalid) {
-      if (keys) prefetch_line(&keys_[head(fwd)]);
       fwd = faces_[fwd >> 2].twin[prev_corner(fwd & 3)];
     }
     if (back != kInvalid) {
-      if (keys) prefetch_line(&keys_[head(back)]);
       const Index t = faces_[back >> 2].twin[back & 3];
       back = t == kInvalid ? kInvalid : (t & ~Index{3}) | next_corner(t & 3);
     }
@@ -676,36 +690,33 @@ void SrMesh::prefetch_fan(Index h, int steps, bool keys) const noexcept {
 
 // Stage s of the look-ahead for the vsplit of vs (stage 0 first, kLookStages - 1 just before the split).
 void SrMesh::prefetch_vsplit(Index vs, int stage) const noexcept {
-  if (state_[vs] != 1) return;
+  if (!node_active(vs)) return;
   const Index c = nodes_[vs].corner;
   if (stage == 0) {
     const Split& r = split_of(vs);
     prefetch_line(&nodes_[r.vt]);
     prefetch_line(&nodes_[r.vu]);
-    prefetch_line(&state_[r.vt]);
   }
-  prefetch_fan(c, stage, stage + 1 == kLookStages);
+  prefetch_fan(c, stage);
 }
 
 void SrMesh::prefetch_ecol(Index vs, int stage) const noexcept {
   const Split& r = split_of(vs);
   if (stage == 0) {
-    prefetch_line(&state_[r.vt]);
-    prefetch_line(&state_[r.vu]);
     prefetch_line(&nodes_[r.vt]);
     prefetch_line(&nodes_[r.vu]);
     if (r.fl != kInvalid) prefetch_line(&faces_[r.fl]);
     if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
     return;
   }
-  if (state_[vs] != 2 || state_[r.vt] != 1 || state_[r.vu] != 1) return;
+  if (!node_refined(vs) || !node_active(r.vt) || !node_active(r.vu)) return;
   const Index f = r.fl != kInvalid ? r.fl : r.fr;
   if (stage == 1) {
     for (Index g : {r.fl, r.fr})
       if (g != kInvalid && faces_[g].v[2] != kInvalid) prefetch_line(&nodes_[faces_[g].v[2]]);
   }
-  prefetch_fan(he(f, 0), stage - 1, false);
-  prefetch_fan(he(f, 1), stage - 1, false);
+  prefetch_fan(he(f, 0), stage - 1);
+  prefetch_fan(he(f, 1), stage - 1);
 }
 
 // refine_all and coarsen_all know the operations to come: the nodes in order of ids. On a big mesh an
@@ -724,7 +735,7 @@ std::size_t SrMesh::refine_all() {
         const std::size_t d = static_cast<std::size_t>((kLookStages - s) * kLookGap);
         if (v >= lo + d) prefetch_vsplit(static_cast<Index>(v - d), s);
       }
-      if (state_[v] == 1 && vsplit(static_cast<Index>(v))) progress = true;
+      if (node_active(v) && vsplit(static_cast<Index>(v))) progress = true;
     }
   }
   return stats_.vsplits - before;
@@ -743,7 +754,7 @@ std::size_t SrMesh::coarsen_all() {
       }
       const Index vs = static_cast<Index>(v);
       const Split& r = split_of(vs);
-      if (state_[vs] == 2 && state_[r.vt] == 1 && state_[r.vu] == 1 && ecol(vs)) progress = true;
+      if (node_refined(vs) && node_active(r.vt) && node_active(r.vu) && ecol(vs)) progress = true;
     }
   }
   return stats_.ecols - before;
@@ -752,17 +763,17 @@ std::size_t SrMesh::coarsen_all() {
 std::vector<Index> SrMesh::active_vertices() const {
   std::vector<Index> out;
   out.reserve(num_active_);
-  for (std::size_t v = 0; v < state_.size(); ++v)
-    if (state_[v] == 1) out.push_back(static_cast<Index>(v));
+  for (std::size_t v = 0; v < nodes_.size(); ++v)
+    if (node_active(v)) out.push_back(static_cast<Index>(v));
   return out;
 }
 
 TriMesh SrMesh::to_mesh(std::vector<Index>* vertex_nodes) const {
   TriMesh m;
-  std::vector<Index> remap(state_.size(), kInvalid);
+  std::vector<Index> remap(nodes_.size(), kInvalid);
   std::vector<Index> nodes;
-  for (std::size_t v = 0; v < state_.size(); ++v)
-    if (state_[v] == 1) {
+  for (std::size_t v = 0; v < nodes_.size(); ++v)
+    if (node_active(v)) {
       remap[v] = static_cast<Index>(nodes.size());
       nodes.push_back(static_cast<Index>(v));
       m.positions.push_back(h_->position(static_cast<Index>(v)));
@@ -777,7 +788,7 @@ TriMesh SrMesh::to_mesh(std::vector<Index>* vertex_nodes) const {
 void SrMesh::validate() const {
   auto fail = [](const std::string& what) { throw std::logic_error("SrMesh::validate: " + what); };
   std::size_t faces = 0, active = 0;
-  std::vector<Index> incident(state_.size(), 0);
+  std::vector<Index> incident(nodes_.size(), 0);
   for (Index f = 0; f < num_slots_; ++f) {
     const FaceSlot& fs = faces_[f];
     if (fs.v[0] == kInvalid) {
@@ -789,7 +800,7 @@ void SrMesh::validate() const {
     const std::string name = "face " + std::to_string(face_of_[f]) + " (slot " + std::to_string(f) + ")";
     for (Index k = 0; k < 3; ++k) {
       const Index v = fs.v[k];
-      if (v == kInvalid || v >= state_.size() || state_[v] != 1) fail(name + ": corner " + std::to_string(v) + " not active");
+      if (v == kInvalid || v >= nodes_.size() || !node_active(v)) fail(name + ": corner " + std::to_string(v) + " not active");
       ++incident[v];
       const Index w = fs.v[next_corner(k)];
       if (v == w) fail(name + ": repeated corner");
@@ -805,11 +816,11 @@ void SrMesh::validate() const {
   if (faces != num_faces_) fail("face count");
   Ring ring;
   ring.buf.resize(2 * kRingStart);
-  for (std::size_t v = 0; v < state_.size(); ++v) {
+  for (std::size_t v = 0; v < nodes_.size(); ++v) {
     const Index p = h_->parent(static_cast<Index>(v));
-    if (state_[v] == 1) {
+    if (node_active(v)) {
       ++active;
-      if (p != kInvalid && state_[p] != 2) fail("node " + std::to_string(v) + ": active under a parent that is not refined");
+      if (p != kInvalid && !node_refined(p)) fail("node " + std::to_string(v) + ": active under a parent that is not refined");
       if (incident[v] == 0) fail("node " + std::to_string(v) + ": active without a face");
       const Index c = nodes_[v].corner;
       if (c == kInvalid || (c >> 2) >= num_slots_ || (c & 3) == 3 || corner_node(c) != v)
@@ -818,11 +829,11 @@ void SrMesh::validate() const {
       if (ring.size() != incident[v]) fail("node " + std::to_string(v) + ": faces form more than one fan");
     } else {
       if (nodes_[v].corner != kInvalid) fail("node " + std::to_string(v) + ": inactive with an incident corner");
-      if (state_[v] == 2) {
-        if (p != kInvalid && state_[p] != 2) fail("node " + std::to_string(v) + ": refined under a parent that is not refined");
+      if (node_refined(v)) {
+        if (p != kInvalid && !node_refined(p)) fail("node " + std::to_string(v) + ": refined under a parent that is not refined");
         const CollapseRecord& r = h_->record(static_cast<Index>(v));
-        if (state_[r.vt] == 0 || state_[r.vu] == 0) fail("node " + std::to_string(v) + ": refined with an inactive child below");
-      } else if (p != kInvalid && state_[p] == 2) {
+        if (node_below(r.vt) || node_below(r.vu)) fail("node " + std::to_string(v) + ": refined with an inactive child below");
+      } else if (p != kInvalid && node_refined(p)) {
         fail("node " + std::to_string(v) + ": below the front under a refined parent");
       }
     }
@@ -830,15 +841,13 @@ void SrMesh::validate() const {
   if (active != num_active_) fail("active count");
   if (active_list_.size() != num_active_) fail("active list size");
   for (std::size_t i = 0; i < active_list_.size(); ++i)
-    if (state_[active_list_[i]] != 1 || nodes_[active_list_[i]].active_pos != i) fail("active list entry " + std::to_string(i));
-  for (std::size_t v = 0; v < state_.size(); ++v)
-    if (state_[v] != 1 && nodes_[v].active_pos != kInvalid) fail("node " + std::to_string(v) + ": inactive but listed");
+    if (active_list_[i] >= nodes_.size() || nodes_[active_list_[i]].active_pos != i) fail("active list entry " + std::to_string(i));
 }
 
 std::size_t SrMesh::memory_bytes() const noexcept {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(SrMesh) + bytes(faces_) + bytes(slot_of_) + bytes(face_of_) + bytes(splits_) + bytes(nodes_) +
-         bytes(base_slots_) + bytes(base_corners_) + bytes(state_) + bytes(keys_) + bytes(vu_of_vt_) + bytes(active_list_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
+         bytes(base_slots_) + bytes(base_corners_) + bytes(vu_of_vt_) + bytes(active_list_) + bytes(list_buf_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
 }
 
 }  // namespace varmesh

@@ -6,9 +6,12 @@
 /// - kKimLee (Kim-Lee 2001, section 4): vsplit_new on ANY active non-leaf vertex, ecol_new on any edge whose
 ///   two ends are active siblings. The cut vertices are the active ancestors of the stored fundamental cut
 ///   vertices vl^, vr^, found in the current 1-ring with the O(1) ancestor test of 64-bit keys (section 4.3),
-///   so an operation costs O(k) for a k-vertex 1-ring. Degenerate cases (section 4.4), counted in
-///   SrStats::degenerate_cases: an ecol whose ends have common neighbours besides the cut vertices is
-///   postponed (ecol returns false); a vsplit whose two cut vertices coincide first splits that vertex.
+///   so an operation costs O(k) for a k-vertex 1-ring. (A split done in the PM order, as refine_all does
+///   them, knows its cut vertices from the collapse sequence and compares node ids instead of reading
+///   keys; so does a split in another order whose PM-order cut vertex is in the ring.) Degenerate cases
+///   (section 4.4), counted in SrStats::degenerate_cases: an ecol whose ends have common neighbours besides
+///   the cut vertices is postponed (ecol returns false); a vsplit whose two cut vertices coincide first
+///   splits that vertex.
 /// - kHoppe97 (Hoppe 1997, "View-dependent refinement of progressive meshes", section 4): vsplit(vs) is legal
 ///   when vs is active and the four stored neighbour faces fn0..fn3 are active; otherwise the vertices whose
 ///   splits create the missing faces are split first (forced, recursively). ecol is legal when the faces
@@ -21,10 +24,12 @@
 /// Faces are original faces (see vertex_hierarchy.hpp): face f is active when its three corners have three
 /// distinct active ancestors, and then its corners are those ancestors. The mesh is stored as face slots
 /// (one per original face, 24 bytes: three corners and the three twin half-edges across its edges, a
-/// half-edge being 4 * slot + corner) and one incident corner per active vertex, so every operation walks
-/// only 1-rings and a ring step is one load. Slots are the original faces in vsplit order (internal; the
-/// API speaks original face ids). The big arrays ask for transparent huge pages on Linux, and
-/// refine_all/coarsen_all walk the fans of the operations a few steps ahead (prefetches only).
+/// half-edge being 4 * slot + corner) and one 8-byte slot per node (an incident corner and its place in
+/// the active list, which also encodes the node's state), so every operation walks only 1-rings, a ring
+/// step is one load, and a split or collapse reads and writes one line per node it changes. Slots are the
+/// original faces in vsplit order (internal; the API speaks original face ids). The big arrays ask for
+/// transparent huge pages on Linux, and refine_all/coarsen_all walk the fans of the operations a few steps
+/// ahead (prefetches only).
 ///
 /// Query API note: update() may keep a few sibling pairs finer than extract() would, because a Kim-Lee ecol
 /// postponed by the degenerate case (section 4.4) is not retried until its neighbourhood changes; the answer
@@ -88,8 +93,10 @@ class SrMesh {
   RefinementScheme scheme() const noexcept { return scheme_; }
 
   enum class State : std::uint8_t { kBelow = 0, kActive = 1, kRefined = 2 };
-  State state(Index v) const noexcept { return static_cast<State>(state_[v]); }
-  bool is_active(Index v) const noexcept { return state_[v] == 1; }
+  State state(Index v) const noexcept {
+    return node_active(v) ? State::kActive : node_refined(v) ? State::kRefined : State::kBelow;
+  }
+  bool is_active(Index v) const noexcept { return node_active(v); }
   std::size_t num_active_vertices() const noexcept { return num_active_; }
   std::size_t num_faces() const noexcept { return num_faces_; }
   bool face_active(Index f) const noexcept { return faces_[slot_of_[f]].v[0] != kInvalid; }
@@ -134,8 +141,8 @@ class SrMesh {
 
   /// RefinableFront (multitri/query.hpp): elements are non-leaf hierarchy nodes; refining one is its vsplit.
   ElementBound element_bound(Index e) const noexcept { return h_->bound(e); }
-  bool is_refined(Index e) const noexcept { return state_[e] == 2; }
-  bool is_coarsenable(Index e) const { return state_[e] == 2 && can_ecol(e); }
+  bool is_refined(Index e) const noexcept { return node_refined(e); }
+  bool is_coarsenable(Index e) const { return node_refined(e) && can_ecol(e); }
   std::uint64_t tie_key(Index e) const noexcept { return static_cast<std::uint64_t>(h_->num_nodes() - e); }
   void reset();
   template <class Sink> void refine(Index e, Sink&& sink) {
@@ -149,12 +156,21 @@ class SrMesh {
   // The candidates' bounds (and a child's record) are read soon after by the query and by vsplit, in an
   // order unrelated to their addresses: asking for them while listing overlaps those cache misses.
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
+    // Filtered into a buffer without branches first: whether a vertex qualifies is hard to predict.
     const auto leaves = static_cast<Index>(h_->num_leaves());
-    for (Index v : active_list_)
-      if (v >= leaves) {
-        prefetch_line(&h_->bound(v));
-        fn(v);
-      }
+    const std::size_t n = active_list_.size();
+    if (list_buf_.size() < n) list_buf_.resize(n);
+    Index* out = list_buf_.data();
+    std::size_t m = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Index v = active_list_[i];
+      out[m] = v;
+      m += v >= leaves;
+    }
+    for (std::size_t j = 0; j < m; ++j) {
+      prefetch_line(&h_->bound(out[j]));
+      fn(out[j]);
+    }
   }
   template <class Fn> void for_each_child_candidate(Index e, Fn&& fn) const {
     const Split& r = split_of(e);
@@ -167,14 +183,25 @@ class SrMesh {
   }
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
     // A refined node whose two children are active, found from its child vt (vu_of_vt_ spares the
-    // collapse record's cache line for the many vertices that do not qualify).
-    for (Index v : active_list_) {
-      const Index u = vu_of_vt_[v];
-      if (u != kInvalid && state_[u] == 1) {
-        const Index p = h_->parent(v);
-        prefetch_line(&h_->bound(p));
-        fn(p);
-      }
+    // collapse record's cache line for the many vertices that do not qualify). Filtered without branches
+    // first, as above (a vertex that is no vt reads its own state, which is active, instead of a sibling's).
+    const std::size_t n = active_list_.size();
+    if (list_buf_.size() < n) list_buf_.resize(n);
+    Index* out = list_buf_.data();
+    const Index* vu = vu_of_vt_.data();
+    const NodeSlot* nodes = nodes_.data();
+    std::size_t m = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Index v = active_list_[i];
+      const Index u = vu[v];
+      const bool is_vt = u != kInvalid;
+      out[m] = v;
+      m += static_cast<std::size_t>(is_vt & (nodes[is_vt ? u : v].active_pos < kRefinedPos));
+    }
+    for (std::size_t j = 0; j < m; ++j) {
+      const Index p = h_->parent(out[j]);
+      prefetch_line(&h_->bound(p));
+      fn(p);
     }
   }
   template <class Fn> void for_each_parent_candidate(Index e, Fn&& fn) const {
@@ -195,18 +222,27 @@ class SrMesh {
     std::array<Index, 3> v;     // corners (active nodes); v[0] == kInvalid when the face is inactive
     std::array<Index, 3> twin;  // twin[k]: the half-edge across edge k, kInvalid on the border
   };
-  // What a vsplit/ecol of node vs reads, copied from its CollapseRecord: 32 bytes, one line, read in the
-  // order of node ids by refine_all/coarsen_all. fl/fr are face slots (kInvalid when absent); kl/kr the
-  // section 4.3 keys of the fundamental cut vertices vl^, vr^ (which would otherwise be two scattered loads).
+  // What a vsplit/ecol of node vs reads, copied from its CollapseRecord: 40 bytes, read in the order of node
+  // ids by refine_all/coarsen_all. fl/fr are face slots (kInvalid when absent); kl/kr the section 4.3 keys
+  // of the fundamental cut vertices vl^, vr^ (which would otherwise be two scattered loads); nl/nr their
+  // ancestors that are active just before this split when the splits are done in decreasing node order
+  // (the PM order of refine_all): the cut vertices of that order, known without reading any key.
   struct Split {
-    Index vt, vu, fl, fr;
+    Index vt, vu, fl, fr, nl, nr;
     std::uint64_t kl, kr;
   };
   const Split& split_of(Index vs) const noexcept { return splits_[vs - h_->num_leaves()]; }
+  // The node's state is in active_pos: its place in active_list_ when active, kRefinedPos when refined,
+  // kInvalid when below the front. So a vsplit/ecol finds the state of vs, vt and vu on the lines it
+  // writes anyway.
+  static constexpr Index kRefinedPos = kInvalid - 1;
   struct NodeSlot {
     Index corner = kInvalid;      // a half-edge starting at this active vertex
-    Index active_pos = kInvalid;  // place in active_list_, kInvalid when not active
+    Index active_pos = kInvalid;  // see above
   };
+  bool node_active(std::size_t v) const noexcept { return nodes_[v].active_pos < kRefinedPos; }
+  bool node_refined(std::size_t v) const noexcept { return nodes_[v].active_pos == kRefinedPos; }
+  bool node_below(std::size_t v) const noexcept { return nodes_[v].active_pos == kInvalid; }
   // One fan around a vertex as half-edges leaving it, counter-clockwise in buf[lo, hi); `closed` when it
   // wraps around. Filled from both ends at once so that the two walks' cache misses overlap.
   struct Ring {
@@ -214,7 +250,7 @@ class SrMesh {
     std::size_t lo = 0, hi = 0;
     bool closed = false;
     Index fwd = kInvalid, back = kInvalid;  // the two walks' last half-edges (see ring_step)
-    bool fwd_open = false, back_open = false, prefetch_keys = false;
+    bool fwd_open = false, back_open = false;
     std::size_t size() const noexcept { return hi - lo; }
     Index operator[](std::size_t i) const noexcept { return buf[lo + i]; }
   };
@@ -224,10 +260,9 @@ class SrMesh {
   Index corner_node(Index h) const noexcept { return faces_[h >> 2].v[h & 3]; }
   Index head(Index h) const noexcept { return faces_[h >> 2].v[next_corner(h & 3)]; }   // neighbour a
   Index third(Index h) const noexcept { return faces_[h >> 2].v[prev_corner(h & 3)]; }  // neighbour b
-  // prefetch_keys: the caller will test the neighbours' section 4.3 keys.
-  void gather_ring(Index start, Ring& ring, bool prefetch_keys = false) const;
+  void gather_ring(Index start, Ring& ring) const;
   void gather_rings(Index start_a, Ring& a, Index start_b, Ring& b) const;  // two rings, walked together
-  void ring_begin(Index start, Ring& ring, bool prefetch_keys) const;
+  void ring_begin(Index start, Ring& ring) const;
   bool ring_step(Ring& ring) const;  // one step each way; true when the ring is complete
   // The i-th neighbour of the ring's centre: heads of its half-edges, then (open fan) the last face's third.
   Index ring_neighbor(const Ring& ring, std::size_t i) const noexcept {
@@ -236,7 +271,7 @@ class SrMesh {
 
   // Look-ahead for refine_all/coarsen_all: touch the fan around half-edge h `steps` faces out each way
   // (those faces were asked for by an earlier call) and ask for the next ones; see refine_all.
-  void prefetch_fan(Index h, int steps, bool keys) const noexcept;
+  void prefetch_fan(Index h, int steps) const noexcept;
   void prefetch_vsplit(Index vs, int stage) const noexcept;
   void prefetch_ecol(Index vs, int stage) const noexcept;
   void do_vsplit(Index vs, Index vl, Index vr, int pl, int pr);  // on ring_, cut vertices and their places given
@@ -268,8 +303,6 @@ class SrMesh {
   detail::SrVector<NodeSlot> nodes_;  // one per node
   std::vector<std::pair<Index, FaceSlot>> base_slots_;  // the base mesh's faces by slot, for reset()
   std::vector<Index> base_corners_;                     // a half-edge of each root, as h_->roots()
-  detail::SrVector<std::uint8_t> state_;
-  detail::SrVector<std::uint64_t> keys_;  // VertexHierarchy::key per node, copied so that it can be prefetched
   detail::SrVector<Index> vu_of_vt_;     // per node: its sibling vu when it is its parent's vt, else kInvalid
   std::vector<Index> active_list_;  // the active nodes, in no particular order
   std::size_t num_active_ = 0, num_faces_ = 0;
@@ -285,6 +318,7 @@ class SrMesh {
     nodes_[v].active_pos = kInvalid;
   }
   SrStats stats_;
+  mutable std::vector<Index> list_buf_;  // scratch of the candidate listings
   mutable Ring ring_, ring2_;
   mutable Index ecn_for_ = kInvalid;  // extra_common_neighbors(ecn_for_) is ecn_result_, rings in ring_/ring2_
   mutable bool ecn_result_ = false;

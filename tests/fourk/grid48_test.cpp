@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <random>
 #include <set>
@@ -321,6 +322,37 @@ TEST(Grid48, RandomRefineCoarsenWalksKeepTheFrontValid) {
   }
 }
 
+// family() and has_refined_child() against for_each_parent / for_each_child, on a lattice with padding and
+// border diamonds (non-square grid, several tiles).
+TEST(Grid48, FamilyMatchesParentAndChildWalks) {
+  const HeightField f = make_fractal_terrain(70, 45, 4);
+  const Grid48 g(f);
+  std::mt19937 rng(3);
+  std::vector<std::uint8_t> refined(g.num_points());
+  for (auto& r : refined) r = rng() % 5 == 0;
+  for (Index p = 0; p < g.num_points(); ++p) {
+    if (!g.is_node(p)) continue;
+    const Grid48::Family fam = g.family(p);
+    std::vector<Index> parents, children;
+    g.for_each_parent(p, [&](Index q) { parents.push_back(q); });
+    g.for_each_child(p, [&](Index c) { children.push_back(c); });
+    ASSERT_EQ(std::vector<Index>(fam.parent, fam.parent + fam.num_parents), parents) << "node " << p;
+    ASSERT_EQ(std::vector<Index>(fam.child, fam.child + fam.num_children), children) << "node " << p;
+    bool any = false;
+    for (int k = 0; k < fam.num_children; ++k) {
+      any = any || refined[fam.child[k]];
+      std::vector<Index> cp;
+      g.for_each_parent(fam.child[k], [&](Index q) { cp.push_back(q); });
+      std::vector<Index> expect{p};
+      if (fam.co_parent[k] != kInvalid) expect.push_back(fam.co_parent[k]);
+      std::sort(cp.begin(), cp.end());
+      std::sort(expect.begin(), expect.end());
+      ASSERT_EQ(cp, expect) << "node " << p << " child " << fam.child[k];
+    }
+    ASSERT_EQ(g.has_refined_child(p, refined.data()), any) << "node " << p;
+  }
+}
+
 }  // namespace
 }  // namespace varmesh
 
@@ -359,6 +391,52 @@ TEST(Grid48, UpdateViewFollowsAMovingCameraExactly) {
   }
   // Coherence pays: far fewer evaluations than there are triangles on the front.
   EXPECT_LT(evaluated, boundary / 2);
+}
+
+// update_view keeps per-diamond records across frames and carries them when it moves a diamond between its
+// boundary sets; generic refine/coarsen_one/update() calls in between must not leave a record that
+// update_view would trust wrongly. Turning cameras, an object-error bound and repeated identical views too.
+TEST(Grid48, UpdateViewMixedWithGenericEditsStaysExact) {
+  const HeightField f = make_fractal_terrain(129, 97, 23, 40.0f);
+  const Grid48 g(f);
+  Grid48Front moving(g), fresh(g);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Index> nodes;
+  for (Index p = 0; p < g.num_points(); ++p)
+    if (g.is_node(p)) nodes.push_back(p);
+  ViewQuery v;
+  v.camera.eye = {10.0f, 10.0f, 50.0f};
+  v.camera.target = {70.0f, 60.0f, 0.0f};
+  v.camera.z_near = 0.5f;
+  v.camera.z_far = 1000.0f;
+  v.pixels = 1.0f;
+  for (int frame = 0; frame < 90; ++frame) {
+    if (frame % 4 != 3) {  // every fourth frame repeats the previous view
+      v.camera.eye += glm::vec3(0.8f + 0.5f * u(rng), 0.5f + 0.5f * u(rng), 0.2f * u(rng));
+      // Turning: the target circles around.
+      const float angle = 0.05f * float(frame);
+      v.camera.target = v.camera.eye + glm::vec3(40.0f * std::cos(angle), 40.0f * std::sin(angle), -30.0f);
+    }
+    if (frame == 45) v.object_error = 0.5f;
+    if (frame % 7 == 2) {
+      // Generic edits between two view updates.
+      for (int k = 0; k < 30; ++k) {
+        const Index p = nodes[rng() % nodes.size()];
+        if (rng() % 2)
+          moving.refine(p);
+        else if (moving.is_coarsenable(p))
+          moving.coarsen_one(p);
+      }
+    }
+    if (frame % 11 == 5) update(moving, v.to_query());
+    moving.update_view(v);
+    fresh.extract_fast(v.to_query());
+    moving.validate();
+    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "frame " << frame;
+    for (Index p = 0; p < g.num_points(); ++p)
+      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "frame " << frame << " point " << p;
+  }
 }
 
 }  // namespace

@@ -29,21 +29,42 @@ MeshReport report_of(TriMesh m) {
   return analyze_mesh(m);
 }
 
+QemOptions with_cost(CollapseCost cost) {
+  QemOptions o;
+  o.cost = cost;
+  return o;
+}
+
+constexpr CollapseCost kCosts[] = {CollapseCost::kQuadric, CollapseCost::kLindstromTurk};
+
+// Signed volume enclosed by a closed mesh.
+double volume_of(const TriMesh& m) {
+  double v = 0.0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const glm::dvec3 a(m.positions[m.indices[3 * f]]), b(m.positions[m.indices[3 * f + 1]]), c(m.positions[m.indices[3 * f + 2]]);
+    v += glm::dot(a, glm::cross(b, c)) / 6.0;
+  }
+  return v;
+}
+
 TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
-  for (const TriMesh& m : {make_icosphere(2), make_grid(10, 8), make_torus(14, 8)}) {
-    const VertexHierarchy h = build_vertex_hierarchy(m);
-    h.validate();
-    const MeshReport in = analyze_mesh(m);
-    for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 17)) {
-      const MeshReport r = report_of(mesh_after_collapses(h, k));
-      EXPECT_EQ(r.non_manifold_edges, 0u) << "after " << k;
-      EXPECT_EQ(r.non_manifold_vertices, 0u) << "after " << k;
-      EXPECT_EQ(r.duplicate_faces, 0u) << "after " << k;
-      EXPECT_EQ(r.degenerate_faces, 0u) << "after " << k;
-      EXPECT_EQ(r.faces, m.num_faces() - 2 * k + r.boundary_edges * 0 + (r.faces - (m.num_faces() - 2 * k)))
-          << "after " << k;  // face count checked below precisely for closed meshes
-      EXPECT_EQ(r.euler_characteristic, in.euler_characteristic) << "topology changed after " << k;
-      EXPECT_EQ(r.components, in.components);
+  for (const CollapseCost cost : kCosts) {
+    for (const TriMesh& m : {make_icosphere(2), make_grid(10, 8), make_torus(14, 8)}) {
+      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
+      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost));
+      h.validate();
+      const MeshReport in = analyze_mesh(m);
+      for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 17)) {
+        const MeshReport r = report_of(mesh_after_collapses(h, k));
+        EXPECT_EQ(r.non_manifold_edges, 0u) << "after " << k;
+        EXPECT_EQ(r.non_manifold_vertices, 0u) << "after " << k;
+        EXPECT_EQ(r.duplicate_faces, 0u) << "after " << k;
+        EXPECT_EQ(r.degenerate_faces, 0u) << "after " << k;
+        EXPECT_EQ(r.faces, m.num_faces() - 2 * k + r.boundary_edges * 0 + (r.faces - (m.num_faces() - 2 * k)))
+            << "after " << k;  // face count checked below precisely for closed meshes
+        EXPECT_EQ(r.euler_characteristic, in.euler_characteristic) << "topology changed after " << k;
+        EXPECT_EQ(r.components, in.components);
+      }
     }
   }
 }
@@ -52,62 +73,66 @@ TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
 // replaced by their ancestors among the first i nodes. fl holds vt->vu, fr holds vu->vt, fn0..fn3 are the faces
 // across (vu, vl), (vl, vt), (vt, vr), (vr, vu), and the stored ring is the 1-ring of vs in M^(i+1).
 TEST(QemAnalysis, RecordsMatchTheMeshesTheyCollapse) {
-  for (const TriMesh& m : {make_icosphere(2), make_grid(9, 7), make_torus(12, 8)}) {
-    const VertexHierarchy h = build_vertex_hierarchy(m);
-    const Index nl = static_cast<Index>(h.num_leaves());
-    std::vector<Index> top(h.num_nodes());
-    auto cut_at = [&](Index prefix) {  // top[v]: the ancestor of v among the nodes < prefix
-      for (Index v = prefix; v-- > 0;) {
-        const Index p = h.parent(v);
-        top[v] = (p != kInvalid && p < prefix) ? top[p] : v;
+  for (const CollapseCost cost : kCosts) {
+    for (const TriMesh& m : {make_icosphere(2), make_grid(9, 7), make_torus(12, 8)}) {
+      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
+      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost));
+      h.validate();
+      const Index nl = static_cast<Index>(h.num_leaves());
+      std::vector<Index> top(h.num_nodes());
+      auto cut_at = [&](Index prefix) {  // top[v]: the ancestor of v among the nodes < prefix
+        for (Index v = prefix; v-- > 0;) {
+          const Index p = h.parent(v);
+          top[v] = (p != kInvalid && p < prefix) ? top[p] : v;
+        }
+      };
+      auto corners = [&](Index f) {
+        const auto c = h.face(f);
+        return std::array<Index, 3>{top[c[0]], top[c[1]], top[c[2]]};
+      };
+      auto holding = [&](Index x, Index y) {  // the live face holding x -> y, or kInvalid
+        for (Index f = 0; f < h.num_faces(); ++f) {
+          const auto c = corners(f);
+          if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+          for (int k = 0; k < 3; ++k)
+            if (c[k] == x && c[(k + 1) % 3] == y) return f;
+        }
+        return kInvalid;
+      };
+      ASSERT_GT(h.num_collapses(), 10u);
+      for (Index vs = nl; vs < h.num_nodes(); ++vs) {
+        const CollapseRecord& r = h.record(vs);
+        cut_at(vs);
+        EXPECT_EQ(holding(r.vt, r.vu), r.fl_hat) << "collapse " << vs - nl;
+        EXPECT_EQ(holding(r.vu, r.vt), r.fr_hat) << "collapse " << vs - nl;
+        if (r.fl_hat != kInvalid) {
+          const Index vl = top[r.vl_hat];
+          const auto c = corners(r.fl_hat);
+          EXPECT_TRUE(c[0] == vl || c[1] == vl || c[2] == vl);
+          EXPECT_EQ(r.fn[0], holding(vl, r.vu)) << "collapse " << vs - nl;
+          EXPECT_EQ(r.fn[1], holding(r.vt, vl)) << "collapse " << vs - nl;
+        }
+        if (r.fr_hat != kInvalid) {
+          const Index vr = top[r.vr_hat];
+          const auto c = corners(r.fr_hat);
+          EXPECT_TRUE(c[0] == vr || c[1] == vr || c[2] == vr);
+          EXPECT_EQ(r.fn[2], holding(vr, r.vt)) << "collapse " << vs - nl;
+          EXPECT_EQ(r.fn[3], holding(r.vu, vr)) << "collapse " << vs - nl;
+        }
+        cut_at(vs + 1);
+        std::vector<Index> ring;
+        for (Index f = 0; f < h.num_faces(); ++f) {
+          const auto c = corners(f);
+          if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+          for (int k = 0; k < 3; ++k)
+            if (c[k] == vs) ring.insert(ring.end(), {c[(k + 1) % 3], c[(k + 2) % 3]});
+        }
+        std::sort(ring.begin(), ring.end());
+        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+        std::vector<Index> stored(h.stored_ring(vs).begin(), h.stored_ring(vs).end());
+        std::sort(stored.begin(), stored.end());
+        EXPECT_EQ(stored, ring) << "collapse " << vs - nl;
       }
-    };
-    auto corners = [&](Index f) {
-      const auto c = h.face(f);
-      return std::array<Index, 3>{top[c[0]], top[c[1]], top[c[2]]};
-    };
-    auto holding = [&](Index x, Index y) {  // the live face holding x -> y, or kInvalid
-      for (Index f = 0; f < h.num_faces(); ++f) {
-        const auto c = corners(f);
-        if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
-        for (int k = 0; k < 3; ++k)
-          if (c[k] == x && c[(k + 1) % 3] == y) return f;
-      }
-      return kInvalid;
-    };
-    ASSERT_GT(h.num_collapses(), 10u);
-    for (Index vs = nl; vs < h.num_nodes(); ++vs) {
-      const CollapseRecord& r = h.record(vs);
-      cut_at(vs);
-      EXPECT_EQ(holding(r.vt, r.vu), r.fl_hat) << "collapse " << vs - nl;
-      EXPECT_EQ(holding(r.vu, r.vt), r.fr_hat) << "collapse " << vs - nl;
-      if (r.fl_hat != kInvalid) {
-        const Index vl = top[r.vl_hat];
-        const auto c = corners(r.fl_hat);
-        EXPECT_TRUE(c[0] == vl || c[1] == vl || c[2] == vl);
-        EXPECT_EQ(r.fn[0], holding(vl, r.vu)) << "collapse " << vs - nl;
-        EXPECT_EQ(r.fn[1], holding(r.vt, vl)) << "collapse " << vs - nl;
-      }
-      if (r.fr_hat != kInvalid) {
-        const Index vr = top[r.vr_hat];
-        const auto c = corners(r.fr_hat);
-        EXPECT_TRUE(c[0] == vr || c[1] == vr || c[2] == vr);
-        EXPECT_EQ(r.fn[2], holding(vr, r.vt)) << "collapse " << vs - nl;
-        EXPECT_EQ(r.fn[3], holding(r.vu, vr)) << "collapse " << vs - nl;
-      }
-      cut_at(vs + 1);
-      std::vector<Index> ring;
-      for (Index f = 0; f < h.num_faces(); ++f) {
-        const auto c = corners(f);
-        if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
-        for (int k = 0; k < 3; ++k)
-          if (c[k] == vs) ring.insert(ring.end(), {c[(k + 1) % 3], c[(k + 2) % 3]});
-      }
-      std::sort(ring.begin(), ring.end());
-      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-      std::vector<Index> stored(h.stored_ring(vs).begin(), h.stored_ring(vs).end());
-      std::sort(stored.begin(), stored.end());
-      EXPECT_EQ(stored, ring) << "collapse " << vs - nl;
     }
   }
 }
@@ -166,6 +191,65 @@ TEST(QemAnalysis, BorderIsPreserved) {
     corners += on_x && on_y;
   }
   EXPECT_EQ(corners, 4);
+}
+
+// Lindstrom-Turk placement keeps the enclosed volume: the volume constraint is the first one and always
+// accepted, so every M^i of a closed mesh encloses the original volume (up to float positions).
+TEST(QemAnalysis, LindstromTurkPreservesVolume) {
+  for (const TriMesh& m : {make_icosphere(3), make_torus(20, 12)}) {
+    QemOptions o = with_cost(CollapseCost::kLindstromTurk);
+    o.target_vertices = 40;
+    const VertexHierarchy h = build_vertex_hierarchy(m, o);
+    h.validate();
+    const double v0 = volume_of(m);
+    ASSERT_GT(h.num_collapses(), 100u);
+    for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 9))
+      EXPECT_NEAR(volume_of(mesh_after_collapses(h, k)), v0, 1e-5 * std::abs(v0)) << "after " << k;
+    EXPECT_NEAR(volume_of(mesh_after_collapses(h, h.num_collapses())), v0, 1e-5 * std::abs(v0));
+    // The quadric placement does not have this property (it shrinks convex shapes a little).
+  }
+}
+
+// On a flat square the volume constraint keeps every vertex in the plane and the border constraint keeps
+// the enclosed area: the base mesh still covers the unit square exactly, with one border loop.
+TEST(QemAnalysis, LindstromTurkPreservesBorderArea) {
+  TriMesh m = make_grid(16, 16, 0.0f);
+  for (glm::vec3& p : m.positions) p.z = 0.0f;  // make_grid adds a saddle 0.05 x y
+  QemOptions o = with_cost(CollapseCost::kLindstromTurk);
+  o.target_vertices = 30;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  h.validate();
+  const TriMesh base = mesh_after_collapses(h, h.num_collapses());
+  EXPECT_EQ(analyze_mesh(base).boundary_loops, 1u);
+  double area = 0.0;
+  for (std::size_t f = 0; f < base.num_faces(); ++f) {
+    const glm::dvec3 a(base.positions[base.indices[3 * f]]), b(base.positions[base.indices[3 * f + 1]]),
+        c(base.positions[base.indices[3 * f + 2]]);
+    const glm::dvec3 n = glm::cross(b - a, c - a);
+    EXPECT_GT(n.z, 0.0) << "face " << f << " turned over";
+    area += 0.5 * n.z;
+  }
+  EXPECT_NEAR(area, 1.0, 1e-5);
+  for (Index v : h.roots()) EXPECT_NEAR(h.position(v).z, 0.0f, 1e-6f);
+}
+
+// The node bounds do not depend on the cost: nested, and the root errors bound the distance from the base
+// vertices to the original surface's planes they replaced (checked loosely: against the sphere).
+TEST(QemAnalysis, LindstromTurkSphereBoundsHold) {
+  const TriMesh m = make_icosphere(4);
+  QemOptions o = with_cost(CollapseCost::kLindstromTurk);
+  o.target_vertices = 250;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  h.validate();
+  float worst = 0;
+  for (Index r : h.roots()) {
+    const float dev = std::abs(glm::length(h.position(r)) - 1.0f);
+    worst = std::max(worst, dev);
+    // vs lies within error of the planes of the faces it replaced; those planes are tangent to within the
+    // icosphere's own sag (< 0.003 at level 4) of the unit sphere.
+    EXPECT_LE(dev, h.bound(r).error + 0.003f) << "root " << r;
+  }
+  EXPECT_LT(worst, 0.02f);
 }
 
 TEST(QemAnalysis, NonManifoldInputIsRepairedNotRejected) {
@@ -254,15 +338,18 @@ TEST(QemAnalysis, DirtySharedMeshes) {
   for (const char* rel : {"meshes/dragon_vrip_res4_5205v.ply", "meshes/dragon_vrip_res3_22998v.ply",
                           "meshes/cow_viewpoint_2903v.obj", "meshes/elephant-with-holes_2798v.off"}) {
     const TriMesh m = read_mesh(testing::shared_data(rel));
-    QemStats stats;
-    const VertexHierarchy h = build_vertex_hierarchy(m, {}, &stats);
-    h.validate();
-    const MeshReport r = analyze_mesh(mesh_after_collapses(h, h.num_collapses()));
-    EXPECT_EQ(r.non_manifold_edges, 0u) << rel;
-    EXPECT_EQ(r.non_manifold_vertices, 0u) << rel;
-    // The dirty dragons fall apart into many small sheets where their non-manifold edges are cut (see
-    // manifold_input.hpp), so the smallest base mesh is not tiny; it must still be much smaller.
-    EXPECT_LT(h.base_faces().size(), m.num_faces() / 2) << rel;
+    for (const CollapseCost cost : kCosts) {
+      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
+      QemStats stats;
+      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost), &stats);
+      h.validate();
+      const MeshReport r = analyze_mesh(mesh_after_collapses(h, h.num_collapses()));
+      EXPECT_EQ(r.non_manifold_edges, 0u) << rel;
+      EXPECT_EQ(r.non_manifold_vertices, 0u) << rel;
+      // The dirty dragons fall apart into many small sheets where their non-manifold edges are cut (see
+      // manifold_input.hpp), so the smallest base mesh is not tiny; it must still be much smaller.
+      EXPECT_LT(h.base_faces().size(), m.num_faces() / 2) << rel;
+    }
   }
 }
 

@@ -223,6 +223,55 @@ TEST(SrMesh, NeighborsAndFaceOrderUseOriginalFaceIds) {
   }
 }
 
+// The candidate listings (filtered without branches from the active list) against a scan of every node;
+// state() (kept in the node slots) against is_active/is_refined.
+TEST(SrMesh, CandidateListingsMatchAScanOfAllNodes) {
+  const VertexHierarchy h = full_hierarchy(make_torus(24, 12));
+  SrMesh sr(h);
+  std::mt19937 rng(17);
+  for (int round = 0; round < 12; ++round) {
+    random_walk(sr, 700, static_cast<std::uint32_t>(rng()), 700, round < 6 ? 0.65 : 0.4);
+    std::vector<Index> refine, coarsen, want_refine, want_coarsen;
+    sr.for_each_refine_candidate([&](Index e) { refine.push_back(e); });
+    sr.for_each_coarsen_candidate([&](Index e) { coarsen.push_back(e); });
+    for (Index v = 0; v < h.num_nodes(); ++v) {
+      const SrMesh::State st = sr.state(v);
+      EXPECT_EQ(st == SrMesh::State::kActive, sr.is_active(v)) << v;
+      EXPECT_EQ(st == SrMesh::State::kRefined, sr.is_refined(v)) << v;
+      if (h.is_leaf(v)) continue;
+      if (st == SrMesh::State::kActive) want_refine.push_back(v);
+      if (st == SrMesh::State::kRefined && sr.is_active(h.vt(v)) && sr.is_active(h.vu(v))) want_coarsen.push_back(v);
+    }
+    std::sort(refine.begin(), refine.end());
+    std::sort(coarsen.begin(), coarsen.end());
+    EXPECT_EQ(refine, want_refine) << "round " << round;
+    EXPECT_EQ(coarsen, want_coarsen) << "round " << round;
+  }
+}
+
+// vsplit finds the cut vertices of splits done in decreasing node order (the PM order) without the
+// section 4.3 keys, and of other splits with them: PM-order splits after a selective walk (a mix of
+// both cases) still give the oracle's meshes and end at the original mesh.
+TEST(SrMesh, PmOrderSplitsAfterASelectiveWalkMatchOracle) {
+  for (const TriMesh& m : {make_icosphere(3), make_grid(16, 12)}) {
+    const VertexHierarchy h = full_hierarchy(m);
+    SrMesh sr(h);
+    random_walk(sr, 300, 23, 300);
+    std::size_t done = 0;
+    for (std::size_t v = h.num_nodes(); v-- > h.num_leaves();) {
+      if (!sr.is_active(static_cast<Index>(v))) continue;
+      EXPECT_TRUE(sr.vsplit(static_cast<Index>(v)));
+      if (++done % 97 == 0) {
+        sr.validate();
+        ASSERT_EQ(compare_with_oracle(sr), "") << "after the split of " << v;
+      }
+    }
+    sr.validate();
+    EXPECT_TRUE(same_as_original(sr));
+    EXPECT_GT(done, 100u);
+  }
+}
+
 TEST(SrMesh, RejectsBadRequests) {
   const VertexHierarchy h = full_hierarchy(make_icosphere(1));
   SrMesh sr(h);
