@@ -26,6 +26,9 @@ struct CompareArgs {
   std::string feature_fraction = "0.05"; ///< fraction of pixels kept as Sobel feature points, in (0, 1]
   std::string grid_size;                 ///< side of the image and terrain grids (default 128, --quick 64)
   std::string panel = "400";             ///< side of one picture panel in pixels
+  /// Collapse order and placement of the analysis: "quadric" (Garland-Heckbert, the default) or
+  /// "lindstrom-turk" (pm/qem_analysis.hpp CollapseCost; the image case's colour quadrics stay GH).
+  std::string cost = "quadric";
   bool quick = false;                    ///< small inputs: a fast run
   bool quiet = false;                    ///< no progress on stderr
 };

@@ -12,12 +12,6 @@
 
 namespace varmesh {
 
-bool Frustum::intersects_sphere(const glm::vec3& c, float r) const noexcept {
-  for (const auto& p : planes)
-    if (p.signed_distance(c) < -r) return false;
-  return true;
-}
-
 glm::mat4 Camera::view() const { return glm::lookAt(eye, target, up); }
 
 glm::mat4 Camera::projection() const {

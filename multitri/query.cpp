@@ -26,7 +26,11 @@ constexpr float kPi = 3.14159265f;
 // |cos(theta) - sin(alpha + beta)| away from it (and at least |cos(alpha + beta)| when alpha + beta >= 90,
 // which must first drop below 90). Moving the eye by delta <= h = (dist - r) / 2 turns c - eye by at most
 // asin(delta / dist) <= (pi / 2) delta / dist and changes beta by at most delta times the largest
-// |d beta / d dist| = r / (D sqrt(D^2 - r^2)) on [dist - h, dist + h], at D = (dist + r) / 2.
+// |d beta / d dist| = r / (D sqrt(D^2 - r^2)) on [dist - h, dist + h], at D = (dist + r) / 2; since
+// D^2 - r^2 = (dist - r)(dist + 3r) / 4 >= h^2, r / (D h) bounds it without a second square root.
+//
+// Without a margin, the common negative case leaves before any square root: sin(alpha + beta) >= 0, so a
+// cone axis that does not point away from the eye (cos(theta) <= 0) is never entirely facing.
 bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float* margin) {
   const float ca = b.cone.cos_half_angle;
   if (b.cone.is_full() || !(ca > 0.0f)) {  // never facing, wherever the eye is
@@ -34,23 +38,26 @@ bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float* marg
     return false;
   }
   const glm::vec3 d = b.center - eye;
-  const float dist = glm::length(d);
-  if (dist <= b.radius) {
+  const float along = sign * glm::dot(b.cone.axis, d);
+  if (!margin && !(along > 0.0f)) return false;
+  const float dist2 = glm::dot(d, d);
+  if (!(dist2 > b.radius * b.radius)) {
     if (margin) *margin = 0.0f;
     return false;
   }
+  const float dist = std::sqrt(dist2);
   const float sb = std::min(1.0f, b.radius / dist);
   const float cb = std::sqrt(std::max(0.0f, 1.0f - sb * sb));
   const float cac = std::min(1.0f, ca);
   const float sa = std::sqrt(std::max(0.0f, 1.0f - cac * cac));
   const float cos_sum = cac * cb - sa * sb;  // cos(alpha + beta)
-  const float cos_theta = sign * glm::dot(b.cone.axis, d) / dist;
+  const float cos_theta = along / dist;
   const float sin_sum = sa * cb + cac * sb;  // sin(alpha + beta)
   const bool result = cos_sum > 0.0f && cos_theta > sin_sum;
   if (margin) {
     const float angle = (cos_sum > 0.0f ? std::fabs(cos_theta - sin_sum) : -cos_sum) - 1e-5f;
     const float h = 0.5f * (dist - b.radius), dd = 0.5f * (dist + b.radius);
-    const float rate = kPi / dist + b.radius / (dd * std::sqrt(std::max(1e-30f, dd * dd - b.radius * b.radius)));
+    const float rate = kPi / dist + b.radius / std::max(1e-30f, dd * h);
     *margin = angle > 0.0f ? std::min(h, angle / rate) : 0.0f;
   }
   return result;
@@ -129,23 +136,47 @@ Criterion Criterion::custom(std::function<bool(const ElementBound&)> is_fine) {
   return c;
 }
 
-Criterion Criterion::all_of(std::vector<Criterion> parts) {
-  if (parts.empty()) throw InvalidInput("all_of: no parts");
+namespace {
+// Evaluation cost rank of a part inside all_of / any_of: cheap and often deciding first.
+int cost_rank(Criterion::Kind k) {
+  switch (k) {
+    case Criterion::Kind::kObjectError: return 0;
+    case Criterion::Kind::kOutsideFrustum: return 1;
+    case Criterion::Kind::kScreenError: return 2;
+    case Criterion::Kind::kAwayFromPoints: return 3;
+    case Criterion::Kind::kBackFacing: return 4;
+    case Criterion::Kind::kAwayFromSilhouette: return 5;
+    case Criterion::Kind::kAllOf:
+    case Criterion::Kind::kAnyOf: return 6;
+    case Criterion::Kind::kCustom: return 7;
+  }
+  return 7;
+}
+}  // namespace
+
+Criterion Criterion::combine(Kind kind, std::vector<Criterion> parts) {
+  // The answer does not depend on the parts' order, so evaluate the cheap ones first. The sort is stable
+  // and depends only on the kinds, so the same criterion for a moved camera lines up part by part
+  // (motion_to).
+  std::stable_sort(parts.begin(), parts.end(),
+                   [](const Criterion& a, const Criterion& b) { return cost_rank(a.kind_) < cost_rank(b.kind_); });
   Criterion c;
-  c.kind_ = Kind::kAllOf;
+  c.kind_ = kind;
   c.parts_ = std::move(parts);
   return c;
+}
+
+Criterion Criterion::all_of(std::vector<Criterion> parts) {
+  if (parts.empty()) throw InvalidInput("all_of: no parts");
+  return combine(Kind::kAllOf, std::move(parts));
 }
 
 Criterion Criterion::any_of(std::vector<Criterion> parts) {
   if (parts.empty()) throw InvalidInput("any_of: no parts");
-  Criterion c;
-  c.kind_ = Kind::kAnyOf;
-  c.parts_ = std::move(parts);
-  return c;
+  return combine(Kind::kAnyOf, std::move(parts));
 }
 
-bool Criterion::is_fine(const ElementBound& b) const {
+inline bool Criterion::leaf_is_fine(const ElementBound& b) const {
   switch (kind_) {
     case Kind::kObjectError:
       return b.error <= value_;
@@ -160,9 +191,9 @@ bool Criterion::is_fine(const ElementBound& b) const {
     case Kind::kAwayFromSilhouette:
       return entirely_facing(b, point_, 1.0f) || entirely_facing(b, point_, -1.0f);
     case Kind::kAwayFromPoints: {
+      const float rr = b.radius + value_;
       for (const auto& p : points_) {
         const glm::vec3 d = b.center - p;
-        const float rr = b.radius + value_;
         if (glm::dot(d, d) <= rr * rr) return false;
       }
       return true;
@@ -170,24 +201,37 @@ bool Criterion::is_fine(const ElementBound& b) const {
     case Kind::kCustom:
       return custom_(b);
     case Kind::kAllOf:
-      for (const auto& p : parts_)
-        if (!p.is_fine(b)) return false;
-      return true;
     case Kind::kAnyOf:
-      for (const auto& p : parts_)
-        if (p.is_fine(b)) return true;
-      return false;
+      break;  // not leaves
   }
-  return true;
+  return is_fine(b);
 }
 
-bool Criterion::is_fine_with_margin(const ElementBound& b, float& margin) const {
+inline bool Criterion::part_is_fine(const ElementBound& b) const {
+  return kind_ == Kind::kAllOf || kind_ == Kind::kAnyOf ? is_fine(b) : leaf_is_fine(b);
+}
+
+bool Criterion::is_fine(const ElementBound& b) const {
+  if (kind_ == Kind::kAllOf) {
+    for (const auto& p : parts_)
+      if (!p.part_is_fine(b)) return false;
+    return true;
+  }
+  if (kind_ == Kind::kAnyOf) {
+    for (const auto& p : parts_)
+      if (p.part_is_fine(b)) return true;
+    return false;
+  }
+  return leaf_is_fine(b);
+}
+
+inline bool Criterion::leaf_is_fine_with_margin(const ElementBound& b, float& margin) const {
   // Each leaf decides exactly as is_fine() does and measures its margin from the same quantities.
   switch (kind_) {
     case Kind::kObjectError:
     case Kind::kAwayFromPoints:
       margin = kInf;  // motion_to() refuses a change of threshold or points
-      return is_fine(b);
+      return leaf_is_fine(b);
     case Kind::kScreenError: {
       float dist = 0.0f;
       const bool fine = screen_fine(b, point_, scale_, value_, dist);
@@ -204,7 +248,9 @@ bool Criterion::is_fine_with_margin(const ElementBound& b, float& margin) const 
     case Kind::kOutsideFrustum: {
       // Outside iff some plane has signed distance < -r (Frustum::intersects_sphere): it stays outside while
       // that plane moves less than its gap; inside (or straddling) while every plane moves less than its gap.
-      float scale = glm::length(b.center) + b.radius, inside = kInf, outside = -1.0f;
+      // The rounding slack scales with |c|; |x| + |y| + |z| >= |c| bounds it without a square root.
+      float scale = std::fabs(b.center.x) + std::fabs(b.center.y) + std::fabs(b.center.z) + b.radius;
+      float inside = kInf, outside = -1.0f;
       for (const Plane& p : frustum_.planes) {
         const float sd = p.signed_distance(b.center);
         scale = std::max(scale, std::fabs(p.d));
@@ -229,27 +275,34 @@ bool Criterion::is_fine_with_margin(const ElementBound& b, float& margin) const 
       margin = 0.0f;
       return custom_(b);
     case Kind::kAllOf:
-    case Kind::kAnyOf: {
-      // The answer holds while the parts that decide it keep theirs: for a fine any_of (a not-fine all_of)
-      // one deciding part suffices (the largest margin among them), otherwise every part counts.
-      const bool any = kind_ == Kind::kAnyOf;
-      float keep_any = 0.0f, keep_all = kInf;  // margins if decided by one part / by all parts
-      bool decided = false;                      // some part has the deciding answer (fine for any_of)
-      for (const auto& p : parts_) {
-        float m = 0.0f;
-        const bool part_fine = p.is_fine_with_margin(b, m);
-        keep_all = std::min(keep_all, m);
-        if (part_fine == any) {
-          decided = true;
-          keep_any = std::max(keep_any, m);
-        }
-      }
-      margin = decided ? keep_any : keep_all;
-      return decided == any;
-    }
+    case Kind::kAnyOf:
+      break;  // not leaves
   }
-  margin = 0.0f;
-  return true;
+  return is_fine_with_margin(b, margin);
+}
+
+inline bool Criterion::part_is_fine_with_margin(const ElementBound& b, float& margin) const {
+  return kind_ == Kind::kAllOf || kind_ == Kind::kAnyOf ? is_fine_with_margin(b, margin)
+                                                        : leaf_is_fine_with_margin(b, margin);
+}
+
+bool Criterion::is_fine_with_margin(const ElementBound& b, float& margin) const {
+  if (kind_ != Kind::kAllOf && kind_ != Kind::kAnyOf) return leaf_is_fine_with_margin(b, margin);
+  // The answer holds while a part that decides it keeps its answer: for a fine any_of (a not-fine all_of)
+  // the first deciding part suffices (stopping there, like is_fine(), gives a smaller but still
+  // conservative margin than the best deciding part); otherwise every part counts.
+  const bool any = kind_ == Kind::kAnyOf;
+  float keep_all = kInf;
+  for (const auto& p : parts_) {
+    float m = 0.0f;
+    if (p.part_is_fine_with_margin(b, m) == any) {
+      margin = m;
+      return any;
+    }
+    keep_all = std::min(keep_all, m);
+  }
+  margin = keep_all;
+  return !any;
 }
 
 bool Criterion::motion_to(const Criterion& next, const glm::vec3& origin, double& turn, double& shift) const {

@@ -60,9 +60,12 @@ class Criterion {
   static Criterion away_from_points(std::vector<glm::vec3> points, float radius);
   /// Any function of the bound: returns true when fine.
   static Criterion custom(std::function<bool(const ElementBound&)> is_fine);
-  /// Fine when every part is fine (refine if any part asks).
+  /// Fine when every part is fine (refine if any part asks). Parts are evaluated cheapest kind first
+  /// (object error, frustum, screen error, feature points, back-facing, silhouette, combinators, custom;
+  /// the given order among equals) and evaluation stops at the first part that decides the answer, so a
+  /// custom() part should not rely on being called.
   static Criterion all_of(std::vector<Criterion> parts);
-  /// Fine when some part is fine (e.g. culled OR accurate enough).
+  /// Fine when some part is fine (e.g. culled OR accurate enough). Evaluated as all_of().
   static Criterion any_of(std::vector<Criterion> parts);
 
   bool is_fine(const ElementBound& b) const;
@@ -95,8 +98,14 @@ class Criterion {
   Frustum frustum_{};
   std::vector<glm::vec3> points_;
   std::function<bool(const ElementBound&)> custom_;
-  std::vector<Criterion> parts_;
+  std::vector<Criterion> parts_;  // sorted by evaluation cost (all_of / any_of)
   bool has_screen_leaf() const;
+  // The per-kind bodies, split so that a combinator's loop calls a leaf without a second dispatch.
+  bool leaf_is_fine(const ElementBound& b) const;
+  bool part_is_fine(const ElementBound& b) const;
+  bool leaf_is_fine_with_margin(const ElementBound& b, float& margin) const;
+  bool part_is_fine_with_margin(const ElementBound& b, float& margin) const;
+  static Criterion combine(Kind kind, std::vector<Criterion> parts);
 };
 
 struct Query {
@@ -159,6 +168,10 @@ class QueryCoherence {
   }
   /// Prepares a frame for query q (update() calls it). Returns false when q cannot use coherence.
   bool begin(const Query& q);
+  /// Hint that wants(e, ...) comes soon: starts loading e's record (update() calls it when it queues e).
+  void prefetch(Index e) const noexcept {
+    if (e < records_.size()) __builtin_prefetch(&records_[e]);
+  }
   /// wants(q) for element e, from memory when its margin allows; bound() gives the element's bound.
   template <class BoundFn>
   bool wants(Index e, const Query& q, BoundFn&& bound, QueryStats& stats) {
@@ -206,6 +219,11 @@ class QueryCoherence {
 
 namespace detail {
 
+// Called with each element update() queues for a criterion answer (a prefetch hint), or nothing.
+struct NoTouch {
+  void operator()(Index) const noexcept {}
+};
+
 class Deadline {
  public:
   explicit Deadline(double ms)
@@ -239,8 +257,9 @@ struct CoarsenOrder {
 };
 inline bool before(const Keyed& a, const Keyed& b) { return RefineOrder{}(b, a); }
 
-template <RefinableFront F, class Wants>
-void refine_unbudgeted(F& front, Wants&& wants, std::vector<Index>& stack, QueryStats& stats, Deadline& deadline) {
+template <RefinableFront F, class Wants, class Touch = NoTouch>
+void refine_unbudgeted(F& front, Wants&& wants, std::vector<Index>& stack, QueryStats& stats, Deadline& deadline,
+                       Touch touch = {}) {
   while (!stack.empty()) {
     const Index e = stack.back();
     stack.pop_back();
@@ -252,7 +271,10 @@ void refine_unbudgeted(F& front, Wants&& wants, std::vector<Index>& stack, Query
     }
     front.refine(e, [&](Index r) {
       ++stats.refined;
-      front.for_each_child_candidate(r, [&](Index c) { stack.push_back(c); });
+      front.for_each_child_candidate(r, [&](Index c) {
+        touch(c);
+        stack.push_back(c);
+      });
     });
   }
 }
@@ -297,10 +319,13 @@ auto plain_wants(const F& front, const Query& q, QueryStats& stats) {
 }
 
 // Step 1 of update(): coarsen maximal elements that are no longer wanted, and their parents in turn.
-template <RefinableFront F, class Wants>
-void coarsen_unwanted(F& front, Wants&& wants, QueryStats& stats) {
+template <RefinableFront F, class Wants, class Touch = NoTouch>
+void coarsen_unwanted(F& front, Wants&& wants, QueryStats& stats, Touch touch = {}) {
   std::vector<Index> work;
-  front.for_each_coarsen_candidate([&](Index e) { work.push_back(e); });
+  front.for_each_coarsen_candidate([&](Index e) {
+    touch(e);
+    work.push_back(e);
+  });
   while (!work.empty()) {
     const Index e = work.back();
     work.pop_back();
@@ -310,16 +335,22 @@ void coarsen_unwanted(F& front, Wants&& wants, QueryStats& stats) {
     if (!front.is_coarsenable(e)) continue;
     front.coarsen_one(e);
     ++stats.coarsened;
-    front.for_each_parent_candidate(e, [&](Index p) { work.push_back(p); });
+    front.for_each_parent_candidate(e, [&](Index p) {
+      touch(p);
+      work.push_back(p);
+    });
   }
 }
 
-template <RefinableFront F, class Wants>
-void update_unbudgeted(F& front, Wants&& wants, QueryStats& stats, Deadline& deadline) {
-  coarsen_unwanted(front, wants, stats);
+template <RefinableFront F, class Wants, class Touch = NoTouch>
+void update_unbudgeted(F& front, Wants&& wants, QueryStats& stats, Deadline& deadline, Touch touch = {}) {
+  coarsen_unwanted(front, wants, stats, touch);
   std::vector<Index> stack;
-  front.for_each_refine_candidate([&](Index e) { stack.push_back(e); });
-  refine_unbudgeted(front, wants, stack, stats, deadline);
+  front.for_each_refine_candidate([&](Index e) {
+    touch(e);
+    stack.push_back(e);
+  });
+  refine_unbudgeted(front, wants, stack, stats, deadline, touch);
 }
 
 }  // namespace detail
@@ -411,7 +442,7 @@ QueryStats update(F& front, const Query& q, QueryCoherence& coherence) {
   QueryStats stats;
   detail::Deadline deadline(q.time_budget_ms);
   auto wants = [&](Index e) { return coherence.wants(e, q, [&] { return front.element_bound(e); }, stats); };
-  detail::update_unbudgeted(front, wants, stats, deadline);
+  detail::update_unbudgeted(front, wants, stats, deadline, [&coherence](Index e) { coherence.prefetch(e); });
   return stats;
 }
 

@@ -766,6 +766,62 @@ void nested_pair(std::mt19937& rng, ElementBound& parent, ElementBound& child) {
   }
 }
 
+// all_of / any_of evaluate their parts cheapest kind first and stop at the first deciding part; whatever
+// order the parts are given in, the answer is the AND / OR of the parts' answers, and is_fine_with_margin()
+// gives the same answer with a margin >= 0 (the margins' promise is checked in QueryCoherence below).
+TEST(QueryCriteria, CombinatorsAreTheOrAndOfTheirLeavesInEveryOrder) {
+  std::mt19937 rng(606);
+  std::size_t fine_any = 0, fine_all = 0, cases = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Camera cam = random_camera(rng, 6.0f);
+    const std::vector<Criterion> leaves = {
+        Criterion::screen_error(cam, 600.0f, uniform(rng, 0.5f, 30.0f)),
+        Criterion::back_facing(cam.eye),
+        Criterion::object_error(uniform(rng, 0.0f, 1.0f)),
+        Criterion::outside_frustum(cam.frustum()),
+        Criterion::away_from_silhouette(cam.eye),
+    };
+    for (int k = 0; k < 8; ++k) {
+      ElementBound b, unused;
+      nested_pair(rng, b, unused);
+      std::vector<bool> leaf_fine;
+      for (const Criterion& c : leaves) leaf_fine.push_back(c.is_fine(b));
+      std::vector<std::size_t> order = {0, 1, 2, 3, 4};
+      do {
+        std::vector<Criterion> parts;
+        bool any = false, all = true;
+        for (std::size_t i : order) {
+          parts.push_back(leaves[i]);
+          any = any || leaf_fine[i];
+          all = all && leaf_fine[i];
+        }
+        const Criterion a = Criterion::any_of(parts), l = Criterion::all_of(parts);
+        // Nested: any_of(first two, all_of(the rest)) in the given order.
+        const Criterion nested = Criterion::any_of(
+            {parts[0], Criterion::all_of({parts[2], parts[3], parts[4]}), parts[1]});
+        const bool nested_expect =
+            leaf_fine[order[0]] || leaf_fine[order[1]] || (leaf_fine[order[2]] && leaf_fine[order[3]] && leaf_fine[order[4]]);
+        ASSERT_EQ(a.is_fine(b), any) << "trial " << trial;
+        ASSERT_EQ(l.is_fine(b), all) << "trial " << trial;
+        ASSERT_EQ(nested.is_fine(b), nested_expect) << "trial " << trial;
+        for (const Criterion* c : {&a, &l, &nested}) {
+          float margin = -1.0f;
+          ASSERT_EQ(c->is_fine_with_margin(b, margin), c->is_fine(b)) << "trial " << trial;
+          ASSERT_GE(margin, 0.0f);
+        }
+        fine_any += any;
+        fine_all += all;
+        ++cases;
+      } while (std::next_permutation(order.begin(), order.end()));
+    }
+  }
+  // Both answers occur for both combinators.
+  EXPECT_GT(fine_any, cases / 20);
+  EXPECT_LT(fine_any, cases);
+  EXPECT_GT(fine_all, 0u);
+  EXPECT_LT(fine_all, cases / 2);
+}
+
 TEST(QueryCriteria, MonotoneOnNestedBounds) {
   std::mt19937 rng(2024);
   std::size_t flips = 0;
