@@ -29,21 +29,41 @@ constexpr float kPi = 3.14159265f;
 // |d beta / d dist| = r / (D sqrt(D^2 - r^2)) on [dist - h, dist + h], at D = (dist + r) / 2; since
 // D^2 - r^2 = (dist - r)(dist + 3r) / 4 >= h^2, r / (D h) bounds it without a second square root.
 //
-// Without a margin, the common negative case leaves before any square root: sin(alpha + beta) >= 0, so a
-// cone axis that does not point away from the eye (cos(theta) <= 0) is never entirely facing.
-bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float* margin) {
+// The same decision without any square root (for is_fine, which runs for every candidate of every frame).
+// alpha + beta < 90 is cos(alpha) > sin(beta), i.e. cos^2(alpha) dist^2 > r^2; and
+// multiplying cos(theta) > sin(alpha) cos(beta) + cos(alpha) sin(beta) by dist gives
+// along - cos(alpha) r > sin(alpha) sqrt(dist^2 - r^2) >= 0, which squares to
+// (along - cos(alpha) r)^2 > (1 - cos^2(alpha)) (dist^2 - r^2) when its left side is positive.
+// A cone axis that does not point away from the eye (along <= 0) is never entirely facing.
+inline bool entirely_facing(const ElementBound& b, const glm::vec3& eye, float sign) {
+  const float ca = std::min(1.0f, b.cone.cos_half_angle);
+  if (b.cone.is_full() || !(ca > 0.0f)) return false;
+  const glm::vec3 d = b.center - eye;
+  const float along = sign * glm::dot(b.cone.axis, d);
+  if (!(along > 0.0f)) return false;
+  const float r2 = b.radius * b.radius;
+  const float dist2 = glm::dot(d, d);
+  if (!(dist2 > r2) || !(ca * ca * dist2 > r2)) return false;
+  const float lhs = along - ca * b.radius;
+  return lhs > 0.0f && lhs * lhs > (1.0f - ca * ca) * (dist2 - r2);
+}
+
+// The decision of entirely_facing() (which is_fine() uses) and how far the eye may move before it can
+// change. The margin is measured in the angle form above; where rounding makes that form disagree with the
+// square-root-free decision, the element sits on the boundary and gets no margin.
+bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float& margin) {
+  const bool result = entirely_facing(b, eye, sign);
   const float ca = b.cone.cos_half_angle;
   if (b.cone.is_full() || !(ca > 0.0f)) {  // never facing, wherever the eye is
-    if (margin) *margin = kInf;
-    return false;
+    margin = kInf;
+    return result;
   }
   const glm::vec3 d = b.center - eye;
   const float along = sign * glm::dot(b.cone.axis, d);
-  if (!margin && !(along > 0.0f)) return false;
   const float dist2 = glm::dot(d, d);
   if (!(dist2 > b.radius * b.radius)) {
-    if (margin) *margin = 0.0f;
-    return false;
+    margin = 0.0f;
+    return result;
   }
   const float dist = std::sqrt(dist2);
   const float sb = std::min(1.0f, b.radius / dist);
@@ -53,25 +73,22 @@ bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float* marg
   const float cos_sum = cac * cb - sa * sb;  // cos(alpha + beta)
   const float cos_theta = along / dist;
   const float sin_sum = sa * cb + cac * sb;  // sin(alpha + beta)
-  const bool result = cos_sum > 0.0f && cos_theta > sin_sum;
-  if (margin) {
-    const float angle = (cos_sum > 0.0f ? std::fabs(cos_theta - sin_sum) : -cos_sum) - 1e-5f;
-    const float h = 0.5f * (dist - b.radius), dd = 0.5f * (dist + b.radius);
-    const float rate = kPi / dist + b.radius / std::max(1e-30f, dd * h);
-    *margin = angle > 0.0f ? std::min(h, angle / rate) : 0.0f;
-  }
+  const bool angle_form = cos_sum > 0.0f && cos_theta > sin_sum;
+  const float angle = (cos_sum > 0.0f ? std::fabs(cos_theta - sin_sum) : -cos_sum) - 1e-5f;
+  const float h = 0.5f * (dist - b.radius), dd = 0.5f * (dist + b.radius);
+  const float rate = kPi / dist + b.radius / std::max(1e-30f, dd * h);
+  margin = angle > 0.0f && angle_form == result ? std::min(h, angle / rate) : 0.0f;
   return result;
 }
 
-bool entirely_facing(const ElementBound& b, const glm::vec3& eye, float sign) { return facing(b, eye, sign, nullptr); }
-
-// Screen-space error test: the error seen from `eye` at the sphere's nearest point is at most `pixels`
-// (scale = pixels per unit at distance one). Inside the sphere only a zero error is fine. `dist` receives
-// the distance from the eye to the sphere.
-bool screen_fine(const ElementBound& b, const glm::vec3& eye, float scale, float pixels, float& dist) {
-  dist = glm::length(b.center - eye) - b.radius;
-  if (dist <= 0.0f) return b.error <= 0.0f;
-  return b.error * scale <= pixels * dist;
+// Screen-space error test: the error seen from `eye` at the sphere's nearest point is at most the pixel
+// threshold; ratio = (pixels per unit at distance one) / threshold. A zero error is fine from everywhere;
+// otherwise the sphere must be at least error * ratio away, |c - eye| - r >= error * ratio, compared squared.
+inline bool screen_fine(const ElementBound& b, const glm::vec3& eye, float ratio) {
+  if (b.error <= 0.0f) return true;
+  const glm::vec3 d = b.center - eye;
+  const float need = b.radius + b.error * ratio;
+  return glm::dot(d, d) >= need * need;
 }
 
 // Rounding slack for margins computed from lengths of about `scale`.
@@ -94,6 +111,7 @@ Criterion Criterion::screen_error(const Camera& camera, float viewport_height, f
   c.kind_ = Kind::kScreenError;
   c.value_ = max_pixels;
   c.scale_ = camera.pixels_per_unit_at_distance_one(viewport_height);
+  c.ratio_ = c.scale_ / c.value_;
   c.point_ = camera.eye;
   return c;
 }
@@ -181,8 +199,7 @@ inline bool Criterion::leaf_is_fine(const ElementBound& b) const {
     case Kind::kObjectError:
       return b.error <= value_;
     case Kind::kScreenError: {
-      float dist = 0.0f;
-      return screen_fine(b, point_, scale_, value_, dist);
+      return screen_fine(b, point_, ratio_);
     }
     case Kind::kOutsideFrustum:
       return !frustum_.intersects_sphere(b.center, b.radius);
@@ -233,14 +250,14 @@ inline bool Criterion::leaf_is_fine_with_margin(const ElementBound& b, float& ma
       margin = kInf;  // motion_to() refuses a change of threshold or points
       return leaf_is_fine(b);
     case Kind::kScreenError: {
-      float dist = 0.0f;
-      const bool fine = screen_fine(b, point_, scale_, value_, dist);
       if (b.error <= 0.0f) {
         margin = kInf;  // fine from everywhere
         return true;
       }
+      const bool fine = screen_fine(b, point_, ratio_);
+      const float dist = glm::length(b.center - point_) - b.radius;
       // Fine iff dist >= t (t > 0), dist being 1-Lipschitz in the eye.
-      const float t = b.error * scale_ / value_;
+      const float t = b.error * ratio_;
       const float m = std::fabs(dist - t) - rounding(dist + 2.0f * b.radius + t);
       margin = ((dist >= t) == fine && m > 0.0f) ? m : 0.0f;
       return fine;
@@ -263,10 +280,10 @@ inline bool Criterion::leaf_is_fine_with_margin(const ElementBound& b, float& ma
       return fine;
     }
     case Kind::kBackFacing:
-      return facing(b, point_, 1.0f, &margin);
+      return facing(b, point_, 1.0f, margin);
     case Kind::kAwayFromSilhouette: {
       float mb = 0.0f, mf = 0.0f;
-      const bool back = facing(b, point_, 1.0f, &mb), front = facing(b, point_, -1.0f, &mf);
+      const bool back = facing(b, point_, 1.0f, mb), front = facing(b, point_, -1.0f, mf);
       const bool fine = back || front;
       margin = fine ? std::max(back ? mb : 0.0f, front ? mf : 0.0f) : std::min(mb, mf);
       return fine;

@@ -94,6 +94,7 @@ class Criterion {
   Kind kind_ = Kind::kObjectError;
   float value_ = 0.0f;   // max error, max pixels, radius
   float scale_ = 0.0f;   // pixels per unit at distance one
+  float ratio_ = 0.0f;   // scale_ / value_ for screen_error (a distance per unit of error)
   glm::vec3 point_{0.0f};
   Frustum frustum_{};
   std::vector<glm::vec3> points_;

@@ -97,11 +97,6 @@ SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), sche
   nodes_.assign(h.num_nodes(), {});
   // mark_ (long rings only) is sized on first use; in_progress_ serves the Xia-Varshney rule only.
   if (scheme == RefinementScheme::kXiaVarshney) in_progress_.assign(h.num_nodes(), 0);
-  vu_of_vt_.assign(h.num_nodes(), kInvalid);
-  for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
-    const CollapseRecord& r = h.record(static_cast<Index>(v));
-    vu_of_vt_[r.vt] = r.vu;
-  }
   // Slots in vsplit order (see faces_); every face is a base face or created by exactly one collapse.
   slot_of_.assign(num_slots_, kInvalid);
   face_of_.assign(num_slots_, kInvalid);
@@ -181,6 +176,7 @@ void SrMesh::reset() {
   ecn_for_ = kInvalid;
   std::fill(nodes_.begin(), nodes_.end(), NodeSlot{});
   active_list_.clear();
+  collapsible_.clear();
   std::fill(faces_.begin(), faces_.end(), FaceSlot{{kInvalid, kInvalid, kInvalid}, {kInvalid, kInvalid, kInvalid}});
   const auto roots = h_->roots();
   for (std::size_t i = 0; i < roots.size(); ++i) {
@@ -335,7 +331,10 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
     nodes_[r.vu].corner = he(fr, 0);
     nodes_[r.vt].corner = he(fr, 1);
   }
-  nodes_[vs].corner = kInvalid;
+  // vs leaves the front, so its parent (if collapsible) no longer is; vs, with both children active, is.
+  const Index parent = h_->parent(vs);
+  if (parent != kInvalid && nodes_[parent].corner != kInvalid) remove_collapsible(parent);
+  add_collapsible(vs);
   deactivate(vs);
   nodes_[vs].active_pos = kRefinedPos;
   activate(r.vt);
@@ -380,11 +379,18 @@ void SrMesh::do_ecol(Index vs) {
   kill(r.fl, vl);
   kill(r.fr, vr);
   if (keep == kInvalid) throw std::logic_error("SrMesh: ecol of node " + std::to_string(vs) + " leaves it without a face");
+  remove_collapsible(vs);
   nodes_[vs].corner = keep;
   nodes_[r.vt].corner = nodes_[r.vu].corner = kInvalid;
   deactivate(r.vt);
   deactivate(r.vu);
   activate(vs);
+  // vs is back on the front: its parent becomes collapsible if vs's sibling is active too.
+  const Index parent = h_->parent(vs);
+  if (parent != kInvalid) {
+    const Split& rp = split_of(parent);
+    if (node_active(rp.vt == vs ? rp.vu : rp.vt)) add_collapsible(parent);
+  }
   --num_active_;
   ++stats_.ecols;
 }
@@ -787,7 +793,7 @@ TriMesh SrMesh::to_mesh(std::vector<Index>* vertex_nodes) const {
 
 void SrMesh::validate() const {
   auto fail = [](const std::string& what) { throw std::logic_error("SrMesh::validate: " + what); };
-  std::size_t faces = 0, active = 0;
+  std::size_t faces = 0, active = 0, num_collapsible = 0;
   std::vector<Index> incident(nodes_.size(), 0);
   for (Index f = 0; f < num_slots_; ++f) {
     const FaceSlot& fs = faces_[f];
@@ -828,17 +834,24 @@ void SrMesh::validate() const {
       gather_ring(c, ring);
       if (ring.size() != incident[v]) fail("node " + std::to_string(v) + ": faces form more than one fan");
     } else {
-      if (nodes_[v].corner != kInvalid) fail("node " + std::to_string(v) + ": inactive with an incident corner");
       if (node_refined(v)) {
         if (p != kInvalid && !node_refined(p)) fail("node " + std::to_string(v) + ": refined under a parent that is not refined");
         const CollapseRecord& r = h_->record(static_cast<Index>(v));
         if (node_below(r.vt) || node_below(r.vu)) fail("node " + std::to_string(v) + ": refined with an inactive child below");
+        const bool collapsible = node_active(r.vt) && node_active(r.vu);
+        const Index at = nodes_[v].corner;
+        if (collapsible ? (at >= collapsible_.size() || collapsible_[at] != v) : at != kInvalid)
+          fail("node " + std::to_string(v) + ": collapsible list entry wrong");
+        num_collapsible += collapsible ? 1 : 0;
+      } else if (nodes_[v].corner != kInvalid) {
+        fail("node " + std::to_string(v) + ": below the front with an incident corner");
       } else if (p != kInvalid && node_refined(p)) {
         fail("node " + std::to_string(v) + ": below the front under a refined parent");
       }
     }
   }
   if (active != num_active_) fail("active count");
+  if (num_collapsible != collapsible_.size()) fail("collapsible list size");
   if (active_list_.size() != num_active_) fail("active list size");
   for (std::size_t i = 0; i < active_list_.size(); ++i)
     if (active_list_[i] >= nodes_.size() || nodes_[active_list_[i]].active_pos != i) fail("active list entry " + std::to_string(i));
@@ -847,7 +860,7 @@ void SrMesh::validate() const {
 std::size_t SrMesh::memory_bytes() const noexcept {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(SrMesh) + bytes(faces_) + bytes(slot_of_) + bytes(face_of_) + bytes(splits_) + bytes(nodes_) +
-         bytes(base_slots_) + bytes(base_corners_) + bytes(vu_of_vt_) + bytes(active_list_) + bytes(list_buf_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
+         bytes(base_slots_) + bytes(base_corners_) + bytes(active_list_) + bytes(collapsible_) + bytes(list_buf_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
 }
 
 }  // namespace varmesh

@@ -182,26 +182,15 @@ class SrMesh {
       }
   }
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
-    // A refined node whose two children are active, found from its child vt (vu_of_vt_ spares the
-    // collapse record's cache line for the many vertices that do not qualify). Filtered without branches
-    // first, as above (a vertex that is no vt reads its own state, which is active, instead of a sibling's).
-    const std::size_t n = active_list_.size();
-    if (list_buf_.size() < n) list_buf_.resize(n);
+    // The refined nodes whose two children are active are kept in collapsible_ by every vsplit and ecol,
+    // so listing them is a dense scan. Copied first: fn may change the mesh.
+    const std::size_t m = collapsible_.size();
+    if (list_buf_.size() < m) list_buf_.resize(m);
     Index* out = list_buf_.data();
-    const Index* vu = vu_of_vt_.data();
-    const NodeSlot* nodes = nodes_.data();
-    std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Index v = active_list_[i];
-      const Index u = vu[v];
-      const bool is_vt = u != kInvalid;
-      out[m] = v;
-      m += static_cast<std::size_t>(is_vt & (nodes[is_vt ? u : v].active_pos < kRefinedPos));
-    }
+    std::copy(collapsible_.begin(), collapsible_.end(), out);
     for (std::size_t j = 0; j < m; ++j) {
-      const Index p = h_->parent(out[j]);
-      prefetch_line(&h_->bound(p));
-      fn(p);
+      prefetch_line(&h_->bound(out[j]));
+      fn(out[j]);
     }
   }
   template <class Fn> void for_each_parent_candidate(Index e, Fn&& fn) const {
@@ -234,10 +223,11 @@ class SrMesh {
   const Split& split_of(Index vs) const noexcept { return splits_[vs - h_->num_leaves()]; }
   // The node's state is in active_pos: its place in active_list_ when active, kRefinedPos when refined,
   // kInvalid when below the front. So a vsplit/ecol finds the state of vs, vt and vu on the lines it
-  // writes anyway.
+  // writes anyway. A refined node has no corner: that field then holds its place in collapsible_ when its
+  // two children are active, else kInvalid.
   static constexpr Index kRefinedPos = kInvalid - 1;
   struct NodeSlot {
-    Index corner = kInvalid;      // a half-edge starting at this active vertex
+    Index corner = kInvalid;      // active: a half-edge starting at this vertex; refined: see above
     Index active_pos = kInvalid;  // see above
   };
   bool node_active(std::size_t v) const noexcept { return nodes_[v].active_pos < kRefinedPos; }
@@ -303,8 +293,8 @@ class SrMesh {
   detail::SrVector<NodeSlot> nodes_;  // one per node
   std::vector<std::pair<Index, FaceSlot>> base_slots_;  // the base mesh's faces by slot, for reset()
   std::vector<Index> base_corners_;                     // a half-edge of each root, as h_->roots()
-  detail::SrVector<Index> vu_of_vt_;     // per node: its sibling vu when it is its parent's vt, else kInvalid
   std::vector<Index> active_list_;  // the active nodes, in no particular order
+  std::vector<Index> collapsible_;  // the refined nodes whose two children are active, in no particular order
   std::size_t num_active_ = 0, num_faces_ = 0;
   void activate(Index v) {
     nodes_[v].active_pos = static_cast<Index>(active_list_.size());
@@ -316,6 +306,17 @@ class SrMesh {
     nodes_[last].active_pos = at;
     active_list_.pop_back();
     nodes_[v].active_pos = kInvalid;
+  }
+  void add_collapsible(Index p) {
+    nodes_[p].corner = static_cast<Index>(collapsible_.size());
+    collapsible_.push_back(p);
+  }
+  void remove_collapsible(Index p) {
+    const Index at = nodes_[p].corner, last = collapsible_.back();
+    collapsible_[at] = last;
+    nodes_[last].corner = at;
+    collapsible_.pop_back();
+    nodes_[p].corner = kInvalid;
   }
   SrStats stats_;
   mutable std::vector<Index> list_buf_;  // scratch of the candidate listings

@@ -223,29 +223,34 @@ TEST(SrMesh, NeighborsAndFaceOrderUseOriginalFaceIds) {
   }
 }
 
-// The candidate listings (filtered without branches from the active list) against a scan of every node;
-// state() (kept in the node slots) against is_active/is_refined.
+// The candidate listings (refine: filtered from the active list; coarsen: the collapsible list that every
+// vsplit and ecol keeps) against a scan of every node, after walks and after reset(); state() (kept in
+// the node slots) against is_active/is_refined.
 TEST(SrMesh, CandidateListingsMatchAScanOfAllNodes) {
   const VertexHierarchy h = full_hierarchy(make_torus(24, 12));
-  SrMesh sr(h);
-  std::mt19937 rng(17);
-  for (int round = 0; round < 12; ++round) {
-    random_walk(sr, 700, static_cast<std::uint32_t>(rng()), 700, round < 6 ? 0.65 : 0.4);
-    std::vector<Index> refine, coarsen, want_refine, want_coarsen;
-    sr.for_each_refine_candidate([&](Index e) { refine.push_back(e); });
-    sr.for_each_coarsen_candidate([&](Index e) { coarsen.push_back(e); });
-    for (Index v = 0; v < h.num_nodes(); ++v) {
-      const SrMesh::State st = sr.state(v);
-      EXPECT_EQ(st == SrMesh::State::kActive, sr.is_active(v)) << v;
-      EXPECT_EQ(st == SrMesh::State::kRefined, sr.is_refined(v)) << v;
-      if (h.is_leaf(v)) continue;
-      if (st == SrMesh::State::kActive) want_refine.push_back(v);
-      if (st == SrMesh::State::kRefined && sr.is_active(h.vt(v)) && sr.is_active(h.vu(v))) want_coarsen.push_back(v);
+  for (const RefinementScheme scheme :
+       {RefinementScheme::kKimLee, RefinementScheme::kHoppe97, RefinementScheme::kXiaVarshney}) {
+    SrMesh sr(h, scheme);
+    std::mt19937 rng(17);
+    for (int round = 0; round < 12; ++round) {
+      if (round == 9) sr.reset();
+      random_walk(sr, 700, static_cast<std::uint32_t>(rng()), 700, round < 6 ? 0.65 : 0.4);
+      std::vector<Index> refine, coarsen, want_refine, want_coarsen;
+      sr.for_each_refine_candidate([&](Index e) { refine.push_back(e); });
+      sr.for_each_coarsen_candidate([&](Index e) { coarsen.push_back(e); });
+      for (Index v = 0; v < h.num_nodes(); ++v) {
+        const SrMesh::State st = sr.state(v);
+        EXPECT_EQ(st == SrMesh::State::kActive, sr.is_active(v)) << v;
+        EXPECT_EQ(st == SrMesh::State::kRefined, sr.is_refined(v)) << v;
+        if (h.is_leaf(v)) continue;
+        if (st == SrMesh::State::kActive) want_refine.push_back(v);
+        if (st == SrMesh::State::kRefined && sr.is_active(h.vt(v)) && sr.is_active(h.vu(v))) want_coarsen.push_back(v);
+      }
+      std::sort(refine.begin(), refine.end());
+      std::sort(coarsen.begin(), coarsen.end());
+      EXPECT_EQ(refine, want_refine) << "round " << round;
+      EXPECT_EQ(coarsen, want_coarsen) << "round " << round << " scheme " << static_cast<int>(scheme);
     }
-    std::sort(refine.begin(), refine.end());
-    std::sort(coarsen.begin(), coarsen.end());
-    EXPECT_EQ(refine, want_refine) << "round " << round;
-    EXPECT_EQ(coarsen, want_coarsen) << "round " << round;
   }
 }
 
