@@ -2,7 +2,7 @@
 // thresholds giving about 10k, 100k and 1M triangles, measured error of every extracted mesh, and a
 // 60-frame flyover (incremental update() against extraction from scratch). It also writes each terrain
 // as a (2^k+1)^2 float32 file plus a manifest so that bench/martini_compare.mjs runs mapbox/martini on the
-// same heights and thresholds. Times are medians of repeated runs on this machine. "extract ms" is
+// same heights and thresholds. Times are medians of back-to-back runs on this machine. "extract ms" is
 // Grid48Front::extract_mesh (one fused descent); extract_fast + to_mesh, the two-call path, is shown too.
 //
 // usage: varmesh_terrain_bench OUT_DIR [SHARED_DATA_DIR]
@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,24 @@ double median_ms(int runs, F&& f) {
     const auto s = Clock::now();
     f();
     t.push_back(ms_since(s));
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+// Median of back-to-back runs of timed() (each after an untimed setup()): at least 9 runs, and for short
+// ones more, until about 200 ms have been timed (at most 401 runs). martini_compare.mjs times martini's
+// getMesh by the same rule, so both sides are measured as repeated calls on warm data.
+template <class Setup, class Timed>
+double median_block_ms(Setup&& setup, Timed&& timed) {
+  std::vector<double> t;
+  double total = 0.0;
+  while (t.size() < 9 || (total < 200.0 && t.size() < 401)) {
+    setup();
+    const auto s = Clock::now();
+    timed();
+    t.push_back(ms_since(s));
+    total += t.back();
   }
   std::sort(t.begin(), t.end());
   return t[t.size() / 2];
@@ -114,85 +133,91 @@ int main(int argc, char** argv) {
         Query q;
         q.criterion = Criterion::object_error(thr);
         TriMesh mesh, mesh2;
-        // The two ways to get the mesh, interleaved so that both see the same machine load.
-        // Also on fresh fronts (one extraction per front, as `varmesh terrain` does; construction not timed).
-        std::vector<double> t_fused, t_two, t_fused_fresh, t_two_fresh;
-        for (int r = 0; r < 9; ++r) {
-          auto t0 = Clock::now();
-          mesh = f.extract_mesh(q);
-          t_fused.push_back(ms_since(t0));
-          t0 = Clock::now();
+        // The two ways to get the mesh, each timed in its own block of back-to-back runs on one front, and
+        // on fresh fronts (one extraction per front, as `varmesh terrain` does; construction not timed).
+        const double ext = median_block_ms([] {}, [&] { mesh = f.extract_mesh(q); });
+        const double two = median_block_ms([] {}, [&] {
           f.extract_fast(q);
           mesh2 = f.to_mesh();
-          t_two.push_back(ms_since(t0));
-          {
-            Grid48Front fresh(g);
-            t0 = Clock::now();
-            const TriMesh m = fresh.extract_mesh(q);
-            t_fused_fresh.push_back(ms_since(t0));
-          }
-          {
-            Grid48Front fresh(g);
-            t0 = Clock::now();
-            fresh.extract_fast(q);
-            const TriMesh m = fresh.to_mesh();
-            t_two_fresh.push_back(ms_since(t0));
-          }
-        }
-        for (auto* t : {&t_fused, &t_two, &t_fused_fresh, &t_two_fresh}) std::sort(t->begin(), t->end());
-        const double ext = t_fused[4], two = t_two[4];
+        });
+        std::optional<Grid48Front> fresh;
+        const double fused_fresh = median_block_ms([&] { fresh.emplace(g); }, [&] { (void)fresh->extract_mesh(q); });
+        const double two_fresh = median_block_ms([&] { fresh.emplace(g); }, [&] {
+          fresh->extract_fast(q);
+          (void)fresh->to_mesh();
+        });
         const double err = std::max(g.max_vertical_error(mesh), g.max_vertical_error(mesh2));
         std::printf("%-18s %-6s %10.1f %8.1f | %9.4g %10zu %10.2f %10.1f %9.4g%s | extract_fast + to_mesh %.2f ms%s"
                     " | fresh front: extract_mesh %.2f, two calls %.2f ms\n",
                     c.name.c_str(), exact ? "exact" : "bound", build, bps, double(thr), mesh.num_faces(), ext,
                     double(mesh.num_faces()) / ext / 1000.0, err, err > double(thr) ? "  VIOLATION" : "", two,
-                    mesh2.num_faces() == mesh.num_faces() ? "" : "  MISMATCH", t_fused_fresh[4], t_two_fresh[4]);
+                    mesh2.num_faces() == mesh.num_faces() ? "" : "  MISMATCH", fused_fresh, two_fresh);
       }
     }
     // Flyover: 60 frames, camera gliding across the terrain at a fixed height, 1 px on 1080 lines.
     // Incremental: Grid48Front::update_view (frame coherence) and the generic update(); from scratch:
-    // extract_fast. All three must give the same mesh every frame.
+    // extract_fast. Each method flies the whole path on its own (frame i starts from frame i - 1's state),
+    // so that it keeps its data in cache as an application would; three rounds, median over all frames.
+    // All three must give the same mesh every frame.
     {
       const Grid48 g(c.field);
       Grid48Front coherent(g), generic(g), fresh(g);
       const float w = float(c.field.width - 1), h = float(c.field.height - 1);
       const auto [zmin, zmax] = std::minmax_element(c.field.z.begin(), c.field.z.end());
-      std::vector<double> t_view, t_gen, t_fresh;
-      std::size_t faces = 0;
-      for (int i = 0; i < 61; ++i) {
+      constexpr int kFrames = 60, kRounds = 3;
+      std::vector<ViewQuery> views;
+      std::vector<Query> queries;
+      for (int i = 0; i <= kFrames; ++i) {
         ViewQuery v;
-        const float s = float(i) / 60.0f;
+        const float s = float(i) / float(kFrames);
         v.camera.eye = {0.1f * w + 0.3f * w * s, 0.1f * h + 0.2f * h * s, *zmax + 0.1f * (*zmax - *zmin)};
         v.camera.target = v.camera.eye + glm::vec3(0.5f * w, 0.5f * h, -0.6f * (*zmax - *zmin));
         v.camera.fov_y_deg = 50.0f;
         v.camera.aspect = 16.0f / 9.0f;
         v.camera.z_near = 0.5f;
         v.camera.z_far = 10.0f * std::max(w, h);
-        const Query q = v.to_query();
-        auto t0 = Clock::now();
-        coherent.update_view(v);
-        const double tv = ms_since(t0);
-        t0 = Clock::now();
-        update(generic, q);
-        const double tg = ms_since(t0);
-        t0 = Clock::now();
-        fresh.extract_fast(q);
-        const double tf = ms_since(t0);
-        if (i > 0) {
-          t_view.push_back(tv);
-          t_gen.push_back(tg);
-          t_fresh.push_back(tf);
-        }
-        faces += fresh.num_faces();
-        if (coherent.num_faces() != fresh.num_faces() || generic.num_faces() != fresh.num_faces())
-          std::printf("  MISMATCH frame %d\n", i);
+        views.push_back(v);
+        queries.push_back(v.to_query());
       }
+      std::vector<double> t_view, t_gen, t_fresh;
+      std::vector<std::size_t> f_view(kFrames + 1), f_gen(kFrames + 1), f_fresh(kFrames + 1);
+      std::size_t faces = 0, mismatches = 0;
+      for (int round = 0; round < kRounds; ++round) {
+        coherent.update_view(views[0]);
+        for (int i = 1; i <= kFrames; ++i) {
+          const auto t0 = Clock::now();
+          coherent.update_view(views[static_cast<std::size_t>(i)]);
+          t_view.push_back(ms_since(t0));
+          f_view[static_cast<std::size_t>(i)] = coherent.num_faces();
+        }
+        update(generic, queries[0]);
+        for (int i = 1; i <= kFrames; ++i) {
+          const auto t0 = Clock::now();
+          update(generic, queries[static_cast<std::size_t>(i)]);
+          t_gen.push_back(ms_since(t0));
+          f_gen[static_cast<std::size_t>(i)] = generic.num_faces();
+        }
+        for (int i = 1; i <= kFrames; ++i) {
+          const auto t0 = Clock::now();
+          fresh.extract_fast(queries[static_cast<std::size_t>(i)]);
+          t_fresh.push_back(ms_since(t0));
+          f_fresh[static_cast<std::size_t>(i)] = fresh.num_faces();
+        }
+        for (int i = 1; i <= kFrames; ++i) {
+          const std::size_t k = static_cast<std::size_t>(i);
+          if (round == 0) faces += f_fresh[k];
+          if (f_view[k] != f_fresh[k] || f_gen[k] != f_fresh[k]) ++mismatches;
+        }
+      }
+      if (mismatches > 0) std::printf("  MISMATCH in %zu frames\n", mismatches);
       std::sort(t_view.begin(), t_view.end());
       std::sort(t_gen.begin(), t_gen.end());
       std::sort(t_fresh.begin(), t_fresh.end());
-      std::printf("%-18s flyover, 60 frames, ~%zu triangles, median ms/frame: update_view %.2f, update %.2f, "
-                  "extract_fast %.2f; from scratch / update_view = %.1fx\n",
-                  c.name.c_str(), faces / 61, t_view[30], t_gen[30], t_fresh[30], t_fresh[30] / t_view[30]);
+      const std::size_t mid = t_view.size() / 2;
+      std::printf("%-18s flyover, %d frames x %d rounds, ~%zu triangles, median ms/frame: update_view %.2f, update "
+                  "%.2f, extract_fast %.2f; from scratch / update_view = %.1fx\n",
+                  c.name.c_str(), kFrames, kRounds, faces / kFrames, t_view[mid], t_gen[mid], t_fresh[mid],
+                  t_fresh[mid] / t_view[mid]);
     }
     const std::string raw = std::filesystem::absolute(out + "/" + c.name + ".f32").string();
     const std::size_t s = write_martini_input(c.field, raw);

@@ -331,10 +331,14 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
     nodes_[r.vu].corner = he(fr, 0);
     nodes_[r.vt].corner = he(fr, 1);
   }
-  // vs leaves the front, so its parent (if collapsible) no longer is; vs, with both children active, is.
-  const Index parent = h_->parent(vs);
-  if (parent != kInvalid && nodes_[parent].corner != kInvalid) remove_collapsible(parent);
-  add_collapsible(vs);
+  if (track_collapsible_) {
+    // vs leaves the front, so its parent (if collapsible) no longer is; vs, with both children active, is.
+    const Index parent = h_->parent(vs);
+    if (parent != kInvalid && nodes_[parent].corner != kInvalid) remove_collapsible(parent);
+    add_collapsible(vs);
+  } else {
+    nodes_[vs].corner = kInvalid;
+  }
   deactivate(vs);
   nodes_[vs].active_pos = kRefinedPos;
   activate(r.vt);
@@ -379,14 +383,14 @@ void SrMesh::do_ecol(Index vs) {
   kill(r.fl, vl);
   kill(r.fr, vr);
   if (keep == kInvalid) throw std::logic_error("SrMesh: ecol of node " + std::to_string(vs) + " leaves it without a face");
-  remove_collapsible(vs);
+  if (track_collapsible_) remove_collapsible(vs);
   nodes_[vs].corner = keep;
   nodes_[r.vt].corner = nodes_[r.vu].corner = kInvalid;
   deactivate(r.vt);
   deactivate(r.vu);
   activate(vs);
   // vs is back on the front: its parent becomes collapsible if vs's sibling is active too.
-  const Index parent = h_->parent(vs);
+  const Index parent = track_collapsible_ ? h_->parent(vs) : kInvalid;
   if (parent != kInvalid) {
     const Split& rp = split_of(parent);
     if (node_active(rp.vt == vs ? rp.vu : rp.vt)) add_collapsible(parent);
@@ -730,7 +734,42 @@ void SrMesh::prefetch_ecol(Index vs, int stage) const noexcept {
 // i they walk the fans of the next ones a few faces further each time (kLookStages stages, kLookGap
 // operations apart): the operations themselves then find their faces in cache. The same operations are
 // done in the same order; the look-ahead only reads.
+void SrMesh::suspend_collapsible() {
+  for (Index p : collapsible_) nodes_[p].corner = kInvalid;
+  collapsible_.clear();
+  track_collapsible_ = false;
+}
+
+void SrMesh::rebuild_collapsible() {
+  // One pass over the split records in node order; the children's states, scattered, are asked for a
+  // few records ahead.
+  track_collapsible_ = true;
+  collapsible_.clear();
+  const std::size_t lo = h_->num_leaves(), n = h_->num_nodes();
+  constexpr std::size_t kAhead = 16;
+  for (std::size_t v = lo; v < n; ++v) {
+    if (v + kAhead < n) {
+      const Split& a = split_of(static_cast<Index>(v + kAhead));
+      prefetch_line(&nodes_[a.vt]);
+      prefetch_line(&nodes_[a.vu]);
+    }
+    const Split& r = split_of(static_cast<Index>(v));
+    if (node_refined(v) && node_active(r.vt) && node_active(r.vu)) add_collapsible(static_cast<Index>(v));
+  }
+}
+
+// The bulk walks below keep no collapsible list while they run (its upkeep would cost each operation
+// scattered reads of the parent and sibling) and rebuild it at the end, in one pass over the active list.
+struct SrMesh::BulkScope {
+  SrMesh& m;
+  explicit BulkScope(SrMesh& mesh) : m(mesh) { m.suspend_collapsible(); }
+  ~BulkScope() { m.rebuild_collapsible(); }
+  BulkScope(const BulkScope&) = delete;
+  BulkScope& operator=(const BulkScope&) = delete;
+};
+
 std::size_t SrMesh::refine_all() {
+  const BulkScope bulk(*this);
   const std::size_t before = stats_.vsplits;
   const std::size_t lo = h_->num_leaves();
   bool progress = true;
@@ -748,6 +787,7 @@ std::size_t SrMesh::refine_all() {
 }
 
 std::size_t SrMesh::coarsen_all() {
+  const BulkScope bulk(*this);
   const std::size_t before = stats_.ecols;
   const std::size_t n = h_->num_nodes();
   bool progress = true;

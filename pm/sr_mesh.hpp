@@ -295,6 +295,10 @@ class SrMesh {
   std::vector<Index> base_corners_;                     // a half-edge of each root, as h_->roots()
   std::vector<Index> active_list_;  // the active nodes, in no particular order
   std::vector<Index> collapsible_;  // the refined nodes whose two children are active, in no particular order
+  bool track_collapsible_ = true;   // false inside refine_all/coarsen_all (see BulkScope)
+  struct BulkScope;
+  void suspend_collapsible();
+  void rebuild_collapsible();
   std::size_t num_active_ = 0, num_faces_ = 0;
   void activate(Index v) {
     nodes_[v].active_pos = static_cast<Index>(active_list_.size());
