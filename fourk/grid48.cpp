@@ -999,11 +999,15 @@ inline bool Grid48Front::ViewContext::evaluate(const Entry& d, Expiry& x) const 
   const float s23 = std::min(pl[2].signed_distance(c), pl[3].signed_distance(c));
   const float s45 = std::min(pl[4].signed_distance(c), pl[5].signed_distance(c));
   const float nearest = std::min(s01, std::min(s23, s45)) + r;  // < 0: outside by -nearest
-  // Screen error: fine when e * scale <= pixels * (dist - r); room = how far dist - r may fall until not.
-  const float dist = glm::length(c - eye);
-  const float gap = dist - r;
-  const bool fine = gap > 0.0f ? e * scale <= pixels * gap : e <= 0.0f;
-  const float room = gap - e * per_pixel;
+  // Screen error: fine when dist - r >= e * scale / pixels, decided as Criterion::is_fine does (a zero error
+  // is fine, else |c - eye|^2 >= (r + e * per_pixel)^2); room = how far dist - r may fall until not. Where
+  // rounding makes the two forms disagree, the slack below is negative and the diamond is re-evaluated.
+  const glm::vec3 to_c = c - eye;
+  const float dist2 = glm::dot(to_c, to_c);
+  const float need = r + e * per_pixel;
+  const bool fine = e <= 0.0f || dist2 >= need * need;
+  const float dist = std::sqrt(dist2);
+  const float room = dist - need;
   const bool wanted = !(nearest < 0.0f) && !fine;
   float slack;
   if (wanted)

@@ -393,6 +393,42 @@ TEST(Grid48, UpdateViewFollowsAMovingCameraExactly) {
   EXPECT_LT(evaluated, boundary / 2);
 }
 
+// update_view decides with its own copy of the view tests; diamonds exactly on the screen-error boundary
+// (pixel threshold set to a diamond's own pixel error and its float neighbours) must be decided as
+// Criterion::is_fine decides them, or update_view and extract disagree by a diamond.
+TEST(Grid48, UpdateViewDecidesBoundaryDiamondsAsTheCriterion) {
+  const HeightField f = make_fractal_terrain(65, 65, 31, 20.0f);
+  const Grid48 g(f);
+  Grid48Front moving(g), fresh(g);
+  std::mt19937 rng(12);
+  std::vector<Index> nodes;
+  for (Index p = 0; p < g.num_points(); ++p)
+    if (g.is_node(p) && g.error(p) > 0.0f) nodes.push_back(p);
+  ASSERT_FALSE(nodes.empty());
+  ViewQuery v;
+  v.camera.eye = {-20.0f, -15.0f, 40.0f};
+  v.camera.target = {32.0f, 32.0f, 0.0f};
+  v.camera.z_near = 0.5f;
+  v.camera.z_far = 1000.0f;
+  int decided = 0;
+  for (int frame = 0; frame < 150; ++frame) {
+    v.camera.eye += glm::vec3(0.05f, 0.04f, 0.0f);
+    const ElementBound b = g.bound(nodes[rng() % nodes.size()]);
+    const float dist = glm::length(b.center - v.camera.eye) - b.radius;
+    if (!(dist > 0.0f)) continue;
+    const float at = b.error * v.camera.pixels_per_unit_at_distance_one(v.viewport_height) / dist;
+    v.pixels = frame % 3 == 0 ? at : std::nextafter(at, frame % 3 == 1 ? 0.0f : 1e30f);
+    if (!(v.pixels > 0.0f)) continue;
+    moving.update_view(v);
+    fresh.extract_fast(v.to_query());
+    ++decided;
+    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "frame " << frame;
+    for (Index p = 0; p < g.num_points(); ++p)
+      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "frame " << frame << " point " << p;
+  }
+  EXPECT_GT(decided, 100);
+}
+
 // update_view keeps per-diamond records across frames and carries them when it moves a diamond between its
 // boundary sets; generic refine/coarsen_one/update() calls in between must not leave a record that
 // update_view would trust wrongly. Turning cameras, an object-error bound and repeated identical views too.
