@@ -82,9 +82,12 @@ constexpr int kXvMaxDepth = 200;
 // stamps; shorter ones (nearly all: valence ~6) compare in registers and test the section 4.3 keys.
 constexpr std::size_t kLongRing = 32;
 constexpr std::size_t kRingStart = 64;
-// Look-ahead of refine_all/coarsen_all: stages and operations between stages.
-constexpr int kLookStages = 4;
-constexpr int kLookGap = 4;
+// Look-ahead of refine_all/coarsen_all: stages and operations between stages. The last stage walks
+// kLookStages - 1 faces each way around a vertex, so 5 stages cover a whole fan of valence up to 8 or 9;
+// on the dragon (AMD EPYC guest) 5 x 3 did vsplit/ecol in 143-175 / 172-203 ns against 195-231 /
+// 271-305 for 4 x 4 (alternating runs; 5 x 2 was as good, 6 or 7 stages and gaps of 4-8 were slower).
+constexpr int kLookStages = 5;
+constexpr int kLookGap = 3;
 
 }  // namespace
 
@@ -644,7 +647,7 @@ bool SrMesh::vsplit(Index vs) {
 
 bool SrMesh::ecol(Index vs) {
   check_node(vs, "ecol");
-  const CollapseRecord& r = h_->record(vs);
+  const Split& r = split_of(vs);  // vt and vu, without the hierarchy's record
   if (!node_refined(vs) || !node_active(r.vt) || !node_active(r.vu))
     throw InvalidInput("ecol: the children of node " + std::to_string(vs) + " are not both active");
   switch (scheme_) {
@@ -729,11 +732,6 @@ void SrMesh::prefetch_ecol(Index vs, int stage) const noexcept {
   prefetch_fan(he(f, 1), stage - 1);
 }
 
-// refine_all and coarsen_all know the operations to come: the nodes in order of ids. On a big mesh an
-// operation's cost is its chain of cache misses (a fan walk is a pointer chase), so while doing operation
-// i they walk the fans of the next ones a few faces further each time (kLookStages stages, kLookGap
-// operations apart): the operations themselves then find their faces in cache. The same operations are
-// done in the same order; the look-ahead only reads.
 void SrMesh::suspend_collapsible() {
   for (Index p : collapsible_) nodes_[p].corner = kInvalid;
   collapsible_.clear();
@@ -759,7 +757,7 @@ void SrMesh::rebuild_collapsible() {
 }
 
 // The bulk walks below keep no collapsible list while they run (its upkeep would cost each operation
-// scattered reads of the parent and sibling) and rebuild it at the end, in one pass over the active list.
+// scattered reads of the parent and sibling) and rebuild it at the end, in one pass over the split records.
 struct SrMesh::BulkScope {
   SrMesh& m;
   explicit BulkScope(SrMesh& mesh) : m(mesh) { m.suspend_collapsible(); }
@@ -768,6 +766,11 @@ struct SrMesh::BulkScope {
   BulkScope& operator=(const BulkScope&) = delete;
 };
 
+// refine_all and coarsen_all know the operations to come: the nodes in order of ids. On a big mesh an
+// operation's cost is its chain of cache misses (a fan walk is a pointer chase), so while doing operation
+// i they walk the fans of the next ones a few faces further each time (kLookStages stages, kLookGap
+// operations apart): the operations themselves then find their faces in cache. The same operations are
+// done in the same order; the look-ahead only reads.
 std::size_t SrMesh::refine_all() {
   const BulkScope bulk(*this);
   const std::size_t before = stats_.vsplits;
