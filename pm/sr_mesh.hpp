@@ -300,28 +300,23 @@ class SrMesh {
   void suspend_collapsible();
   void rebuild_collapsible();
   std::size_t num_active_ = 0, num_faces_ = 0;
-  void activate(Index v) {
-    nodes_[v].active_pos = static_cast<Index>(active_list_.size());
-    active_list_.push_back(v);
+  // Two lists of nodes with O(1) insertion and removal: each member's place is kept in a field of its
+  // node slot (active_list_: active_pos; collapsible_: corner, free while the node is refined).
+  template <Index NodeSlot::*kPlace> void list_insert(std::vector<Index>& list, Index v) {
+    nodes_[v].*kPlace = static_cast<Index>(list.size());
+    list.push_back(v);
   }
-  void deactivate(Index v) {
-    const Index at = nodes_[v].active_pos, last = active_list_.back();
-    active_list_[at] = last;
-    nodes_[last].active_pos = at;
-    active_list_.pop_back();
-    nodes_[v].active_pos = kInvalid;
+  template <Index NodeSlot::*kPlace> void list_erase(std::vector<Index>& list, Index v) {
+    const Index at = nodes_[v].*kPlace, last = list.back();
+    list[at] = last;
+    nodes_[last].*kPlace = at;
+    list.pop_back();
+    nodes_[v].*kPlace = kInvalid;
   }
-  void add_collapsible(Index p) {
-    nodes_[p].corner = static_cast<Index>(collapsible_.size());
-    collapsible_.push_back(p);
-  }
-  void remove_collapsible(Index p) {
-    const Index at = nodes_[p].corner, last = collapsible_.back();
-    collapsible_[at] = last;
-    nodes_[last].corner = at;
-    collapsible_.pop_back();
-    nodes_[p].corner = kInvalid;
-  }
+  void activate(Index v) { list_insert<&NodeSlot::active_pos>(active_list_, v); }
+  void deactivate(Index v) { list_erase<&NodeSlot::active_pos>(active_list_, v); }
+  void add_collapsible(Index p) { list_insert<&NodeSlot::corner>(collapsible_, p); }
+  void remove_collapsible(Index p) { list_erase<&NodeSlot::corner>(collapsible_, p); }
   SrStats stats_;
   mutable std::vector<Index> list_buf_;  // scratch of the candidate listings
   mutable Ring ring_, ring2_;

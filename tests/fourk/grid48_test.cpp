@@ -21,6 +21,13 @@
 namespace varmesh {
 namespace {
 
+// The two fronts refine exactly the same diamonds (an incrementally moved front against extract()).
+void expect_same_front(const Grid48& g, const Grid48Front& moving, const Grid48Front& fresh, const char* what, int at) {
+  ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << what << " " << at;
+  for (Index p = 0; p < g.num_points(); ++p)
+    ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << what << " " << at << " point " << p;
+}
+
 // Every interior edge shared by exactly two consistently oriented triangles, boundary edges only on the
 // grid rectangle, no T-junction (a vertex lying inside another triangle's edge), area = rectangle's area.
 void expect_conforming_cover(const TriMesh& m, double width, double height) {
@@ -291,9 +298,7 @@ TEST(Grid48, UpdateFromAnyEarlierFrontEqualsExtract) {
     moving.validate();
     Grid48Front fresh(g);
     extract(fresh, q);
-    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "step " << i;
-    for (Index p = 0; p < g.num_points(); ++p)
-      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "step " << i << " point " << p;
+    ASSERT_NO_FATAL_FAILURE(expect_same_front(g, moving, fresh, "step", i));
     if (q.triangle_budget) {
       EXPECT_LE(fresh.num_faces(), q.triangle_budget);
     }
@@ -381,9 +386,7 @@ TEST(Grid48, UpdateViewFollowsAMovingCameraExactly) {
     const QueryStats st = moving.update_view(v);
     fresh.extract_fast(v.to_query());
     moving.validate();
-    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "frame " << frame;
-    for (Index p = 0; p < g.num_points(); ++p)
-      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "frame " << frame << " point " << p;
+    ASSERT_NO_FATAL_FAILURE(expect_same_front(g, moving, fresh, "frame", frame));
     if (frame > 0 && frame != 60 && frame != 90) {
       evaluated += st.evaluated;
       boundary += fresh.num_faces();
@@ -422,9 +425,7 @@ TEST(Grid48, UpdateViewDecidesBoundaryDiamondsAsTheCriterion) {
     moving.update_view(v);
     fresh.extract_fast(v.to_query());
     ++decided;
-    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "frame " << frame;
-    for (Index p = 0; p < g.num_points(); ++p)
-      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "frame " << frame << " point " << p;
+    ASSERT_NO_FATAL_FAILURE(expect_same_front(g, moving, fresh, "frame", frame));
   }
   EXPECT_GT(decided, 100);
 }
@@ -469,9 +470,7 @@ TEST(Grid48, UpdateViewMixedWithGenericEditsStaysExact) {
     moving.update_view(v);
     fresh.extract_fast(v.to_query());
     moving.validate();
-    ASSERT_EQ(moving.num_faces(), fresh.num_faces()) << "frame " << frame;
-    for (Index p = 0; p < g.num_points(); ++p)
-      ASSERT_EQ(moving.is_refined(p), fresh.is_refined(p)) << "frame " << frame << " point " << p;
+    ASSERT_NO_FATAL_FAILURE(expect_same_front(g, moving, fresh, "frame", frame));
   }
 }
 
