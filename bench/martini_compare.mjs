@@ -55,8 +55,8 @@ console.log('terrain            init ms  error-map ms | threshold  triangles   m
 for (const c of cases) {
   const buf = fs.readFileSync(c.file);
   const z = new Float32Array(buf.buffer, buf.byteOffset, c.size * c.size);
-  const [initMs, martini] = median(5, () => new Martini(c.size));
-  const [tileMs, tile] = median(5, () => martini.createTile(z));
+  const [initMs, martini] = median(9, () => new Martini(c.size));
+  const [tileMs, tile] = median(9, () => martini.createTile(z));
   for (const thr of c.thresholds) {
     const [meshMs, mesh] = median(9, () => tile.getMesh(thr));
     const n = mesh.triangles.length / 3;

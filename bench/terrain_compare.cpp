@@ -28,21 +28,10 @@ namespace {
 
 double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
-template <class F>
-double median_ms(int runs, F&& f) {
-  std::vector<double> t;
-  for (int i = 0; i < runs; ++i) {
-    const auto s = Clock::now();
-    f();
-    t.push_back(ms_since(s));
-  }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
-}
-
 // Median of back-to-back runs of timed() (each after an untimed setup()): at least 9 runs, and for short
 // ones more, until about 200 ms have been timed (at most 401 runs). martini_compare.mjs times martini's
-// getMesh by the same rule, so both sides are measured as repeated calls on warm data.
+// construction, error map and getMesh by the same rule, so both sides are measured as repeated calls on
+// warm data.
 template <class Setup, class Timed>
 double median_block_ms(Setup&& setup, Timed&& timed) {
   std::vector<double> t;
@@ -120,7 +109,7 @@ int main(int argc, char** argv) {
     for (bool exact : {true, false}) {
       Grid48Options go;
       go.exact_errors = exact;
-      const double build = median_ms(exact ? 3 : 5, [&] { Grid48 g(c.field, go); });
+      const double build = median_block_ms([] {}, [&] { Grid48 g(c.field, go); });
       const Grid48 g(c.field, go);
       const double bps = double(g.memory_bytes()) / double(samples);
       const std::size_t targets[] = {10000, 100000, 1000000};

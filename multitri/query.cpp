@@ -36,7 +36,7 @@ constexpr float kPi = 3.14159265f;
 // (along - cos(alpha) r)^2 > (1 - cos^2(alpha)) (dist^2 - r^2) when its left side is positive.
 // A cone axis that does not point away from the eye (along <= 0) is never entirely facing.
 inline bool entirely_facing(const ElementBound& b, const glm::vec3& eye, float sign) {
-  const float ca = std::min(1.0f, b.cone.cos_half_angle);
+  const float ca = std::min(b.cone.cos_half_angle, 1.0f);  // this order keeps a NaN (never facing)
   if (b.cone.is_full() || !(ca > 0.0f)) return false;
   const glm::vec3 d = b.center - eye;
   const float along = sign * glm::dot(b.cone.axis, d);

@@ -136,6 +136,10 @@ SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), sche
     uf[r.vt] = uf[r.vu] = static_cast<Index>(v);
   }
   active_list_.reserve(h.num_leaves());
+  // Collapsible nodes have two active children each and no child is shared, so at most half the leaves
+  // are collapsible at once: reserved, the list never reallocates (nor throws) inside vsplit, ecol or the
+  // rebuild at the end of refine_all/coarsen_all.
+  collapsible_.reserve(h.num_leaves() / 2 + 1);
   for (Ring* ring : {&ring_, &ring2_}) ring->buf.resize(2 * kRingStart);
   nbrs_.reserve(kLongRing + 1);
   build_base();
@@ -733,6 +737,7 @@ void SrMesh::prefetch_ecol(Index vs, int stage) const noexcept {
 }
 
 void SrMesh::suspend_collapsible() {
+  collapsible_.reserve(h_->num_leaves() / 2 + 1);  // as the constructor does (a copy has no spare room)
   for (Index p : collapsible_) nodes_[p].corner = kInvalid;
   collapsible_.clear();
   track_collapsible_ = false;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -624,6 +625,16 @@ TEST(QueryCriteria, BackFacingByGeometry) {
   // No normal information, or the eye inside the sphere: never fine.
   EXPECT_FALSE(c.is_fine(bound_at({0, 0, 10}, 1.0f)));
   EXPECT_FALSE(c.is_fine(bound_at({0, 0, 0.5f}, 1.0f, 1.0f, {0, 0, 1}, 1.0f)));
+  // A NaN cone carries no normal information either, wherever the eye is, and the margin says so: for the
+  // silhouette criterion too, and with the margin's answer equal to is_fine's.
+  ElementBound nan_cone = bound_at({0, 0, 10}, 1.0f, 1.0f, {0, 0, 1}, 10.0f);
+  nan_cone.cone.cos_half_angle = std::numeric_limits<float>::quiet_NaN();
+  for (const glm::vec3 e : {glm::vec3(0.0f), glm::vec3(0, 0, 20), glm::vec3(5, 0, 10)})
+    for (const Criterion& k : {Criterion::back_facing(e), Criterion::away_from_silhouette(e)}) {
+      float margin = 0.0f;
+      EXPECT_FALSE(k.is_fine(nan_cone));
+      EXPECT_FALSE(k.is_fine_with_margin(nan_cone, margin));
+    }
 }
 
 TEST(QueryCriteria, AwayFromSilhouetteByGeometry) {
