@@ -254,6 +254,39 @@ TEST(SrMesh, CandidateListingsMatchAScanOfAllNodes) {
   }
 }
 
+// A copied (and a moved) mesh carries its node lists: walking the copy and the original the same way keeps
+// both valid and equal, including refine_all/coarsen_all, whose collapsible list is rebuilt at the end.
+TEST(SrMesh, CopiesAndMovesKeepTheirNodeLists) {
+  const VertexHierarchy h = full_hierarchy(make_torus(20, 10));
+  SrMesh a(h);
+  random_walk(a, 500, 3, 500);
+  SrMesh b = a;
+  SrMesh c(h);
+  c = b;
+  SrMesh d = std::move(c);
+  auto coarsen_list = [](const SrMesh& m) {
+    std::vector<Index> out;
+    m.for_each_coarsen_candidate([&](Index e) { out.push_back(e); });
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  for (SrMesh* m : {&a, &b, &d}) {
+    random_walk(*m, 400, 9, 400);
+    m->validate();
+  }
+  EXPECT_EQ(coarsen_list(a), coarsen_list(b));
+  EXPECT_EQ(coarsen_list(a), coarsen_list(d));
+  b.refine_all();
+  b.validate();
+  EXPECT_TRUE(coarsen_list(b).size() > 0u);
+  b.coarsen_all();
+  b.validate();
+  d.reset();
+  d.validate();
+  EXPECT_EQ(coarsen_list(b), coarsen_list(d));  // both at the base mesh
+  EXPECT_EQ(b.num_faces(), d.num_faces());
+}
+
 // vsplit finds the cut vertices of splits done in decreasing node order (the PM order) without the
 // section 4.3 keys, and of other splits with them: PM-order splits after a selective walk (a mix of
 // both cases) still give the oracle's meshes and end at the original mesh.
