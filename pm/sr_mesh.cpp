@@ -748,6 +748,7 @@ void SrMesh::rebuild_collapsible() {
   // few records ahead.
   track_collapsible_ = true;
   collapsible_.clear();
+  if (num_active_ == h_->num_roots()) return;  // the base mesh (each vsplit adds one active node): none refined
   const std::size_t lo = h_->num_leaves(), n = h_->num_nodes();
   constexpr std::size_t kAhead = 16;
   for (std::size_t v = lo; v < n; ++v) {
