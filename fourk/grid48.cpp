@@ -957,8 +957,8 @@ float float_down(double v) {
 struct Grid48Front::ViewContext {
   Frustum frustum;
   glm::vec3 eye{};
-  float scale = 0.0f, pixels = 1.0f, object_error = -1.0f;
-  float per_pixel = 0.0f;       // scale / pixels
+  float object_error = -1.0f;
+  float per_pixel = 0.0f;       // pixels per unit at distance one / pixel threshold (Criterion's ratio)
   bool motion_known = false;    // false: no previous frame (the slack is split in halves)
   float step_moved = 0.0f, step_turned = 0.0f;  // this frame's increments
   float moved_up = 0.0f, turned_up = 0.0f;      // accumulated motion now, rounded up
@@ -999,7 +999,7 @@ inline bool Grid48Front::ViewContext::evaluate(const Entry& d, Expiry& x) const 
   const float s23 = std::min(pl[2].signed_distance(c), pl[3].signed_distance(c));
   const float s45 = std::min(pl[4].signed_distance(c), pl[5].signed_distance(c));
   const float nearest = std::min(s01, std::min(s23, s45)) + r;  // < 0: outside by -nearest
-  // Screen error: fine when dist - r >= e * scale / pixels, decided as Criterion::is_fine does (a zero error
+  // Screen error: fine when dist - r >= e * per_pixel, decided as Criterion::is_fine does (a zero error
   // is fine, else |c - eye|^2 >= (r + e * per_pixel)^2); room = how far dist - r may fall until not. Where
   // rounding makes the two forms disagree, the slack below is negative and the diamond is re-evaluated.
   const glm::vec3 to_c = c - eye;
@@ -1152,9 +1152,7 @@ QueryStats Grid48Front::update_view(const ViewQuery& v) {
   ViewContext cx;
   cx.frustum = v.camera.frustum();
   cx.eye = v.camera.eye;
-  cx.scale = v.camera.pixels_per_unit_at_distance_one(v.viewport_height);
-  cx.pixels = v.pixels;
-  cx.per_pixel = cx.scale / v.pixels;
+  cx.per_pixel = v.camera.pixels_per_unit_at_distance_one(v.viewport_height) / v.pixels;
   cx.motion_known = same_params;
   cx.object_error = v.object_error;
   cx.step_moved = step_moved_;

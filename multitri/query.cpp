@@ -198,9 +198,8 @@ inline bool Criterion::leaf_is_fine(const ElementBound& b) const {
   switch (kind_) {
     case Kind::kObjectError:
       return b.error <= value_;
-    case Kind::kScreenError: {
+    case Kind::kScreenError:
       return screen_fine(b, point_, ratio_);
-    }
     case Kind::kOutsideFrustum:
       return !frustum_.intersects_sphere(b.center, b.radius);
     case Kind::kBackFacing:

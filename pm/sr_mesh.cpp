@@ -461,9 +461,7 @@ bool SrMesh::xv_ring_matches(Index vs) const {
 }
 
 bool SrMesh::can_ecol(Index vs) const {
-  if (vs >= h_->num_nodes() || h_->is_leaf(vs) || !node_refined(vs)) return false;
-  const Split& r = split_of(vs);
-  if (!node_active(r.vt) || !node_active(r.vu)) return false;
+  if (vs >= h_->num_nodes() || h_->is_leaf(vs) || !collapsible(vs)) return false;
   switch (scheme_) {
     case RefinementScheme::kKimLee: return !extra_common_neighbors(vs);
     case RefinementScheme::kHoppe97: return hoppe_ecol_legal(vs) && !extra_common_neighbors(vs);
@@ -628,7 +626,7 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
         ok = false;
         break;
       }
-  ok = ok && node_refined(vs) && node_active(r.vt) && node_active(r.vu) && xv_ring_matches(vs) && !extra_common_neighbors(vs);
+  ok = ok && collapsible(vs) && xv_ring_matches(vs) && !extra_common_neighbors(vs);
   if (ok) do_ecol(vs);
   in_progress_[vs] = 0;
   return ok;
@@ -651,8 +649,7 @@ bool SrMesh::vsplit(Index vs) {
 
 bool SrMesh::ecol(Index vs) {
   check_node(vs, "ecol");
-  const Split& r = split_of(vs);  // vt and vu, without the hierarchy's record
-  if (!node_refined(vs) || !node_active(r.vt) || !node_active(r.vu))
+  if (!collapsible(vs))
     throw InvalidInput("ecol: the children of node " + std::to_string(vs) + " are not both active");
   switch (scheme_) {
     case RefinementScheme::kKimLee:
@@ -726,7 +723,7 @@ void SrMesh::prefetch_ecol(Index vs, int stage) const noexcept {
     if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
     return;
   }
-  if (!node_refined(vs) || !node_active(r.vt) || !node_active(r.vu)) return;
+  if (!collapsible(vs)) return;
   const Index f = r.fl != kInvalid ? r.fl : r.fr;
   if (stage == 1) {
     for (Index g : {r.fl, r.fr})
@@ -757,8 +754,7 @@ void SrMesh::rebuild_collapsible() {
       prefetch_line(&nodes_[a.vt]);
       prefetch_line(&nodes_[a.vu]);
     }
-    const Split& r = split_of(static_cast<Index>(v));
-    if (node_refined(v) && node_active(r.vt) && node_active(r.vu)) add_collapsible(static_cast<Index>(v));
+    if (collapsible(static_cast<Index>(v))) add_collapsible(static_cast<Index>(v));
   }
 }
 
@@ -808,8 +804,7 @@ std::size_t SrMesh::coarsen_all() {
         if (v + d < n) prefetch_ecol(static_cast<Index>(v + d), s);
       }
       const Index vs = static_cast<Index>(v);
-      const Split& r = split_of(vs);
-      if (node_refined(vs) && node_active(r.vt) && node_active(r.vu) && ecol(vs)) progress = true;
+      if (collapsible(vs) && ecol(vs)) progress = true;
     }
   }
   return stats_.ecols - before;
@@ -887,11 +882,11 @@ void SrMesh::validate() const {
         if (p != kInvalid && !node_refined(p)) fail("node " + std::to_string(v) + ": refined under a parent that is not refined");
         const CollapseRecord& r = h_->record(static_cast<Index>(v));
         if (node_below(r.vt) || node_below(r.vu)) fail("node " + std::to_string(v) + ": refined with an inactive child below");
-        const bool collapsible = node_active(r.vt) && node_active(r.vu);
+        const bool listed = collapsible(static_cast<Index>(v));
         const Index at = nodes_[v].corner;
-        if (collapsible ? (at >= collapsible_.size() || collapsible_[at] != v) : at != kInvalid)
+        if (listed ? (at >= collapsible_.size() || collapsible_[at] != v) : at != kInvalid)
           fail("node " + std::to_string(v) + ": collapsible list entry wrong");
-        num_collapsible += collapsible ? 1 : 0;
+        num_collapsible += listed ? 1 : 0;
       } else if (nodes_[v].corner != kInvalid) {
         fail("node " + std::to_string(v) + ": below the front with an incident corner");
       } else if (p != kInvalid && node_refined(p)) {

@@ -233,6 +233,11 @@ class SrMesh {
   bool node_active(std::size_t v) const noexcept { return nodes_[v].active_pos < kRefinedPos; }
   bool node_refined(std::size_t v) const noexcept { return nodes_[v].active_pos == kRefinedPos; }
   bool node_below(std::size_t v) const noexcept { return nodes_[v].active_pos == kInvalid; }
+  // Non-leaf v is refined and both its children are active (what an ecol of v needs, before its rule).
+  bool collapsible(Index v) const noexcept {
+    const Split& r = split_of(v);
+    return node_refined(v) && node_active(r.vt) && node_active(r.vu);
+  }
   // One fan around a vertex as half-edges leaving it, counter-clockwise in buf[lo, hi); `closed` when it
   // wraps around. Filled from both ends at once so that the two walks' cache misses overlap.
   struct Ring {
