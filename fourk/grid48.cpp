@@ -148,12 +148,19 @@ void Grid48::build_histogram() {
   const std::size_t slots = 2 + error_key(top) - hist_key0_;
   refined_above_.assign(slots + 1, 0);
   faces_above_.assign(slots + 1, 0);
-  for (Index p = 0; p < num_points(); ++p) {
-    if (!is_node(p)) continue;
-    const float e = records_[p].error;
-    const std::size_t k = e > 0.0f ? 1 + std::max(error_key(e), hist_key0_) - hist_key0_ : 0;
-    ++refined_above_[k];
-    faces_above_[k] += static_cast<std::uint32_t>(num_triangles(p));
+  // Row by row: every point but the tile corners is a node; one removes 2 faces, or 1 on the lattice
+  // border (the num_triangles() rule).
+  const std::size_t mask = tile_ - 1;
+  for (std::size_t y = 0; y < lh_; ++y) {
+    const PointRecord* row = records_.data() + y * lw_;
+    const bool tile_row = (y & mask) == 0, border_row = y == 0 || y + 1 == lh_;
+    for (std::size_t x = 0; x < lw_; ++x) {
+      if (tile_row && (x & mask) == 0) continue;
+      const float e = row[x].error;
+      const std::size_t k = e > 0.0f ? 1 + std::max(error_key(e), hist_key0_) - hist_key0_ : 0;
+      ++refined_above_[k];
+      faces_above_[k] += (border_row || x == 0 || x + 1 == lw_) ? 1u : 2u;
+    }
   }
   for (std::size_t k = slots; k-- > 0;) {
     refined_above_[k] += refined_above_[k + 1];
@@ -191,7 +198,12 @@ void Grid48::compute_bounds_fast(bool exact) {
   const std::size_t n = lw_ * lh_;
   error_.assign(n, 0.0f);
   radius_.assign(n, 0.0f);
-  std::vector<float> rmax(2 * n, -3.0e38f), rmin(2 * n, 3.0e38f);  // empty ranges by default
+  // Per triangle (2 per lattice point): the range of h - plane over its grid samples, empty by default.
+  HugeVector<float> ranges(4 * n);
+  float* const rmin = ranges.data();
+  float* const rmax = rmin + 2 * n;
+  std::fill(rmin, rmin + 2 * n, 3.0e38f);
+  std::fill(rmax, rmax + 2 * n, -3.0e38f);
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
   const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
   const float* z = z_.data();
@@ -275,71 +287,194 @@ void Grid48::compute_bounds_fast(bool exact) {
     out_hi = static_cast<float>(hi);
     if (double(out_hi) < hi) out_hi = std::nextafter(out_hi, 3.0e38f);
   };
-  for_each_diamond_finest_first(w, h, log2_tile_, [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
-      const int pass = square ? 1 : 0;
-      const bool yodd = ((y / d) & 1) != 0;
-      const std::size_t p = static_cast<std::size_t>(y * w + x);
-      // The diamond's corners: hypotenuse ends (b, c) and the one or two apexes.
-      std::ptrdiff_t bx, by, cx, cy, a0x, a0y, a1x, a1y;
-      if (pass == 1) {
-        const std::ptrdiff_t qx = ((x - d) / (2 * d)) % 2 != 0 ? x - d : x + d;
-        const std::ptrdiff_t qy = ((y - d) / (2 * d)) % 2 != 0 ? y - d : y + d;
-        bx = qx, by = qy, cx = 2 * x - qx, cy = 2 * y - qy;
-        a0x = 2 * x - qx, a0y = qy, a1x = qx, a1y = 2 * y - qy;
-      } else if (!yodd) {  // horizontal split edge
-        bx = x - d, by = y, cx = x + d, cy = y;
-        a0x = x, a0y = y - d, a1x = x, a1y = y + d;
-      } else {  // vertical split edge
-        bx = x, by = y - d, cx = x, cy = y + d;
-        a0x = x - d, a0y = y, a1x = x + d, a1y = y;
+  // The diamond at (x, y) of size d = 2^ld: hypotenuse ends (b, c) and the two apexes (either may lie
+  // outside the lattice).
+  struct Corners {
+    std::ptrdiff_t bx, by, cx, cy, ax[2], ay[2];
+  };
+  auto corners = [](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
+    Corners k;
+    if (square) {
+      const std::ptrdiff_t qx = (((x - d) >> (ld + 1)) & 1) != 0 ? x - d : x + d;
+      const std::ptrdiff_t qy = (((y - d) >> (ld + 1)) & 1) != 0 ? y - d : y + d;
+      k = {qx, qy, 2 * x - qx, 2 * y - qy, {2 * x - qx, qx}, {qy, 2 * y - qy}};
+    } else if (((y >> ld) & 1) == 0) {  // horizontal split edge
+      k = {x - d, y, x + d, y, {x, x}, {y - d, y + d}};
+    } else {  // vertical split edge
+      k = {x, y - d, x, y + d, {x - d, x + d}, {y, y}};
+    }
+    return k;
+  };
+  // Any diamond, near the padding or not, with either kind of error.
+  auto visit = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
+    const int ld = grid48_detail::ctz(static_cast<std::size_t>(d));
+    const std::size_t p = static_cast<std::size_t>(y * w + x);
+    const Corners cn = corners(x, y, d, ld, square);
+    const std::ptrdiff_t bx = cn.bx, by = cn.by, cx = cn.cx, cy = cn.cy;
+    const std::ptrdiff_t a0x = cn.ax[0], a0y = cn.ay[0], a1x = cn.ax[1], a1y = cn.ay[1];
+    const double hb = z[by * w + bx], hc = z[cy * w + cx], hm = z[p];
+    const double delta = hm - 0.5 * (hb + hc);
+    const float dlo = static_cast<float>(std::min(0.0, delta)), dhi = static_cast<float>(std::max(0.0, delta));
+    float err = 0.0f;
+    const glm::vec3 centre(float(x) * sx_, float(y) * sy_, z[p]);
+    float r = 0.0f;
+    for (int k = 0; k < 2; ++k) {
+      const std::ptrdiff_t ax = k == 0 ? a0x : a1x, ay = k == 0 ? a0y : a1y;
+      if (ax < 0 || ay < 0 || ax >= w || ay >= h) continue;
+      const int side = (ax < x || (ax == x && ay < y)) ? 0 : 1;
+      float lo = 3.0e38f, hi = -3.0e38f;
+      if (exact) {
+        exact_range(Tri{ax, ay, bx, by, cx, cy}, lo, hi);
+        if (lo <= hi) err = std::max({err, hi, -lo});
+      } else {
+        float lo0, hi0, lo1, hi1;
+        child_range(x, y, ax, ay, bx, by, lo0, hi0);
+        child_range(x, y, cx, cy, ax, ay, lo1, hi1);
+        if (lo0 <= hi0) {
+          lo = std::min(lo, lo0 + dlo);
+          hi = std::max(hi, hi0 + dhi);
+        }
+        if (lo1 <= hi1) {
+          lo = std::min(lo, lo1 + dlo);
+          hi = std::max(hi, hi1 + dhi);
+        }
+        if (lo <= hi) {
+          // Outward rounding keeps the float range a bound of the double computation.
+          lo -= std::abs(lo) * 1e-6f + 1e-30f;
+          hi += std::abs(hi) * 1e-6f + 1e-30f;
+          err = std::max({err, hi, -lo});
+        }
       }
-      const double hb = z[by * w + bx], hc = z[cy * w + cx], hm = z[p];
-      const double delta = hm - 0.5 * (hb + hc);
+      rmin[2 * p + static_cast<std::size_t>(side)] = lo;
+      rmax[2 * p + static_cast<std::size_t>(side)] = hi;
+      const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, z[ay * w + ax]);
+      r = std::max(r, glm::length(apex - centre));
+    }
+    r = std::max({r, glm::length(glm::vec3(float(bx) * sx_, float(by) * sy_, float(hb)) - centre),
+                  glm::length(glm::vec3(float(cx) * sx_, float(cy) * sy_, float(hc)) - centre)});
+    for_each_child(static_cast<Index>(p), [&](Index ch) {
+      err = std::max(err, error_[ch]);
+      r = std::max(r, glm::length(position(ch) - centre) + radius_[ch]);
+    });
+    error_[p] = err;
+    radius_[p] = r * (1.0f + 1e-6f);
+  };
+  if (exact) {
+    for_each_diamond_finest_first(w, h, log2_tile_, visit);
+    return;
+  }
+
+  // The fast bound of the diamonds whose corners are all grid samples (all but a thin band along the
+  // padding), a row at a time. Along a row the corners, children and child triangles sit at the same
+  // offsets from the diamond (squares alternate between two layouts), so those are worked out once per
+  // row from the general corner rule; every value is computed as visit() would compute it.
+  std::vector<float> colx(lw_), rowy(lh_);
+  for (std::ptrdiff_t x = 0; x < w; ++x) colx[x] = float(x) * sx_;
+  for (std::ptrdiff_t y = 0; y < h; ++y) rowy[y] = float(y) * sy_;
+  float* const lo_of = rmin;
+  float* const hi_of = rmax;
+  float* const err_of = error_.data();
+  float* const rad_of = radius_.data();
+  struct Layout {
+    std::ptrdiff_t px[4], py[4], pl[4];  // corners a0, a1, b, c: offsets in x, y and index
+    std::ptrdiff_t t0[2], t1[2];          // per apex: its two children triangles, offsets from 2 p
+    std::ptrdiff_t side[2];               // per apex: the side its triangle is stored at
+    std::ptrdiff_t qx[4], qy[4], ql[4];   // children diamonds
+  };
+  auto layout = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
+    const Corners cn = corners(x, y, d, ld, square);
+    Layout l;
+    const std::ptrdiff_t kx[4] = {cn.ax[0], cn.ax[1], cn.bx, cn.cx}, ky[4] = {cn.ay[0], cn.ay[1], cn.by, cn.cy};
+    for (int j = 0; j < 4; ++j) l.px[j] = kx[j] - x, l.py[j] = ky[j] - y, l.pl[j] = l.py[j] * w + l.px[j];
+    auto tri = [&](std::ptrdiff_t ux, std::ptrdiff_t uy, std::ptrdiff_t vx, std::ptrdiff_t vy) {
+      const std::ptrdiff_t mx = (ux + vx) >> 1, my = (uy + vy) >> 1;
+      return 2 * ((my * w + mx) - (y * w + x)) + ((x < mx || (x == mx && y < my)) ? 0 : 1);
+    };
+    for (int k = 0; k < 2; ++k) {
+      l.t0[k] = tri(cn.ax[k], cn.ay[k], cn.bx, cn.by);
+      l.t1[k] = tri(cn.cx, cn.cy, cn.ax[k], cn.ay[k]);
+      l.side[k] = (cn.ax[k] < x || (cn.ax[k] == x && cn.ay[k] < y)) ? 0 : 1;
+    }
+    const std::ptrdiff_t e = square ? d : d >> 1;
+    const std::ptrdiff_t sqx[4] = {-e, e, 0, 0}, sqy[4] = {0, 0, -e, e}, edx[4] = {-e, e, -e, e}, edy[4] = {-e, -e, e, e};
+    for (int i = 0; i < 4; ++i) {
+      l.qx[i] = square ? sqx[i] : edx[i];
+      l.qy[i] = square ? sqy[i] : edy[i];
+      l.ql[i] = l.qy[i] * w + l.qx[i];
+    }
+    return l;
+  };
+  auto row = [&](std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
+    const bool finest = !square && ld == 0;  // children are finest triangles (range [0, 0]), no child diamonds
+    const Layout lay[2] = {layout(x0, y, d, ld, square), layout(x0 + 2 * d, y, d, ld, square)};
+    const float ry = rowy[y];
+    int parity = 0;
+    for (std::ptrdiff_t x = x0; x <= x1; x += 2 * d, parity ^= 1) {
+      const Layout& l = lay[square ? parity : 0];
+      const std::ptrdiff_t p = y * w + x;
+      const float zp = z[p], rx = colx[x];
+      const double delta = double(zp) - 0.5 * (double(z[p + l.pl[2]]) + double(z[p + l.pl[3]]));
       const float dlo = static_cast<float>(std::min(0.0, delta)), dhi = static_cast<float>(std::max(0.0, delta));
-      float err = 0.0f;
-      const glm::vec3 centre(float(x) * sx_, float(y) * sy_, z[p]);
-      float r = 0.0f;
+      float side_err[2];
       for (int k = 0; k < 2; ++k) {
-        const std::ptrdiff_t ax = k == 0 ? a0x : a1x, ay = k == 0 ? a0y : a1y;
-        if (ax < 0 || ay < 0 || ax >= w || ay >= h) continue;
-        const int side = (ax < x || (ax == x && ay < y)) ? 0 : 1;
-        float lo = 3.0e38f, hi = -3.0e38f;
-        if (exact) {
-          exact_range(Tri{ax, ay, bx, by, cx, cy}, lo, hi);
-          if (lo <= hi) err = std::max({err, hi, -lo});
-        } else {
-          float lo0, hi0, lo1, hi1;
-          child_range(x, y, ax, ay, bx, by, lo0, hi0);
-          child_range(x, y, cx, cy, ax, ay, lo1, hi1);
-          if (lo0 <= hi0) {
-            lo = std::min(lo, lo0 + dlo);
-            hi = std::max(hi, hi0 + dhi);
+        float lo0 = 0.0f, hi0 = 0.0f, lo1 = 0.0f, hi1 = 0.0f;
+        if (!finest) {
+          lo0 = lo_of[2 * p + l.t0[k]], hi0 = hi_of[2 * p + l.t0[k]];
+          lo1 = lo_of[2 * p + l.t1[k]], hi1 = hi_of[2 * p + l.t1[k]];
+        }
+        // Both children hold grid samples (their corners), so neither range is empty.
+        float lo = std::min(lo0 + dlo, lo1 + dlo), hi = std::max(hi0 + dhi, hi1 + dhi);
+        lo -= std::abs(lo) * 1e-6f + 1e-30f;
+        hi += std::abs(hi) * 1e-6f + 1e-30f;
+        side_err[k] = std::max(hi, -lo);
+        lo_of[2 * p + l.side[k]] = lo;
+        hi_of[2 * p + l.side[k]] = hi;
+      }
+      // Maxima are exact, so trees of independent terms give visit()'s values; sqrt is monotone, so the
+      // root of the largest squared corner distance is the largest corner distance.
+      auto sq = [&](std::ptrdiff_t ox, std::ptrdiff_t oy, std::ptrdiff_t ol) {
+        const glm::vec3 v(colx[x + ox] - rx, rowy[y + oy] - ry, z[p + ol] - zp);
+        return glm::dot(v, v);
+      };
+      float r = std::sqrt(std::max(std::max(sq(l.px[0], l.py[0], l.pl[0]), sq(l.px[1], l.py[1], l.pl[1])),
+                                   std::max(sq(l.px[2], l.py[2], l.pl[2]), sq(l.px[3], l.py[3], l.pl[3]))));
+      float err = std::max(side_err[0], side_err[1]);
+      if (!finest) {
+        float ce[4], cr[4];
+        for (int i = 0; i < 4; ++i) {
+          ce[i] = err_of[p + l.ql[i]];
+          cr[i] = std::sqrt(sq(l.qx[i], l.qy[i], l.ql[i])) + rad_of[p + l.ql[i]];
+        }
+        err = std::max(err, std::max(std::max(ce[0], ce[1]), std::max(ce[2], ce[3])));
+        r = std::max(r, std::max(std::max(cr[0], cr[1]), std::max(cr[2], cr[3])));
+      }
+      err_of[p] = err;
+      rad_of[p] = r * (1.0f + 1e-6f);
+    }
+  };
+  for (int ld = 0; ld < log2_tile_; ++ld) {
+    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
+    for (int pass = 0; pass < 2; ++pass) {
+      const bool square = pass == 1;
+      for (std::ptrdiff_t y = 0; y < h; y += d) {
+        const bool yodd = ((y >> ld) & 1) != 0;
+        if (square && !yodd) continue;
+        std::ptrdiff_t x = (square || !yodd) ? d : 0;
+        if (y >= d && y + d <= last_y) {
+          if (x < d) {
+            visit(x, y, d, square);
+            x += 2 * d;
           }
-          if (lo1 <= hi1) {
-            lo = std::min(lo, lo1 + dlo);
-            hi = std::max(hi, hi1 + dhi);
-          }
-          if (lo <= hi) {
-            // Outward rounding keeps the float range a bound of the double computation.
-            lo -= std::abs(lo) * 1e-6f + 1e-30f;
-            hi += std::abs(hi) * 1e-6f + 1e-30f;
-            err = std::max({err, hi, -lo});
+          if (x + d <= last_x) {  // x - d >= 0 here; the row's interior part ends at the last x + d <= last_x
+            const std::ptrdiff_t x1 = x + ((last_x - d - x) / (2 * d)) * (2 * d);
+            row(x, x1, y, d, ld, square);
+            x = x1 + 2 * d;
           }
         }
-        rmin[2 * p + static_cast<std::size_t>(side)] = lo;
-        rmax[2 * p + static_cast<std::size_t>(side)] = hi;
-        const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, z[ay * w + ax]);
-        r = std::max(r, glm::length(apex - centre));
+        for (; x < w; x += 2 * d) visit(x, y, d, square);
       }
-      r = std::max({r, glm::length(glm::vec3(float(bx) * sx_, float(by) * sy_, float(hb)) - centre),
-                    glm::length(glm::vec3(float(cx) * sx_, float(cy) * sy_, float(hc)) - centre)});
-      for_each_child(static_cast<Index>(p), [&](Index ch) {
-        err = std::max(err, error_[ch]);
-        r = std::max(r, glm::length(position(ch) - centre) + radius_[ch]);
-      });
-      error_[p] = err;
-      radius_[p] = r * (1.0f + 1e-6f);
-    });
+    }
+  }
 }
 
 std::size_t Grid48::num_nodes() const noexcept { return lw_ * lh_ - (tx_ + 1) * (ty_ + 1); }

@@ -34,6 +34,7 @@
 #include "multitri/bounds.hpp"
 #include "multitri/camera.hpp"
 #include "multitri/heightfield.hpp"
+#include "multitri/huge_pages.hpp"
 #include "multitri/query.hpp"
 #include "multitri/mt.hpp"
 #include "multitri/tri_mesh.hpp"
@@ -172,10 +173,10 @@ class Grid48 {
   float sx_ = 1.0f, sy_ = 1.0f;
   FastDivider row_of_;
   // Build scratch, released when the hierarchy is built: heights as contiguous rows, errors.
-  std::vector<float> z_;      // lattice heights (padding repeats the border)
-  std::vector<float> error_;  // per lattice point (0 for tile corners)
-  std::vector<PointRecord> records_;  // per lattice point: error, height
-  std::vector<float> radius_;         // per lattice point
+  HugeVector<float> z_;      // lattice heights (padding repeats the border)
+  HugeVector<float> error_;  // per lattice point (0 for tile corners)
+  HugeVector<PointRecord> records_;  // per lattice point: error, height
+  HugeVector<float> radius_;         // per lattice point
   // Error histogram: key(e) = float bits of e >> 18 (32 keys per octave), clamped below at hist_key0_;
   // refined_above_[k] / faces_above_[k] = nodes (faces they remove) in slots >= k, where slot 0 holds the
   // nodes of error 0 and slot 1 + j those with key hist_key0_ + j.

@@ -14,58 +14,9 @@
 #include <stdexcept>
 #include <string>
 
-// Sanitizers see through operator new only: under ASan (gcc: __SANITIZE_ADDRESS__; clang: __has_feature)
-// the big arrays stay on the heap so that out-of-bounds accesses are still caught.
-#if defined(__SANITIZE_ADDRESS__)
-#define VARMESH_SR_NO_HUGE_PAGES 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define VARMESH_SR_NO_HUGE_PAGES 1
-#endif
-#endif
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 #include "multitri/errors.hpp"
 
 namespace varmesh {
-
-namespace detail {
-
-// An operation touches some twenty scattered cache lines of these arrays; with 4 KiB pages nearly each is
-// also a TLB miss on a mesh of 10^5-10^6 faces, with 2 MiB pages the arrays' translations fit in the TLB.
-void* sr_allocate(std::size_t bytes) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(VARMESH_SR_NO_HUGE_PAGES)
-  constexpr std::size_t kHuge = std::size_t{2} << 20;
-  if (bytes >= kHuge) {
-    // Map 2 MiB more and trim, so that the block starts on a huge-page boundary; munmap(p, bytes) frees it.
-    void* m = mmap(nullptr, bytes + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (m == MAP_FAILED) throw std::bad_alloc();
-    const auto at = reinterpret_cast<std::uintptr_t>(m);
-    const std::uintptr_t start = (at + kHuge - 1) & ~(std::uintptr_t{kHuge} - 1);
-    const std::uintptr_t end = start + bytes, map_end = at + bytes + kHuge;
-    const std::uintptr_t page_end = (end + 4095) & ~std::uintptr_t{4095};
-    if (start > at) munmap(m, start - at);
-    if (map_end > page_end) munmap(reinterpret_cast<void*>(page_end), map_end - page_end);
-    madvise(reinterpret_cast<void*>(start), bytes, MADV_HUGEPAGE);
-    return reinterpret_cast<void*>(start);
-  }
-#endif
-  return ::operator new(bytes);
-}
-
-void sr_deallocate(void* p, std::size_t bytes) noexcept {
-#if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(VARMESH_SR_NO_HUGE_PAGES)
-  if (bytes >= (std::size_t{2} << 20)) {
-    munmap(p, bytes);
-    return;
-  }
-#endif
-  ::operator delete(p, bytes);  // sized: also the only use of bytes when huge pages are off
-}
-
-}  // namespace detail
 
 const char* scheme_name(RefinementScheme s) noexcept {
   switch (s) {

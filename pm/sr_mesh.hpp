@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "multitri/bounds.hpp"
+#include "multitri/huge_pages.hpp"
 #include "multitri/tri_mesh.hpp"
 #include "pm/vertex_hierarchy.hpp"
 
@@ -54,24 +55,6 @@ namespace varmesh {
 
 enum class RefinementScheme : std::uint8_t { kKimLee, kHoppe97, kXiaVarshney };
 
-namespace detail {
-/// Memory for SrMesh's big arrays: blocks of 2 MiB and more are fresh anonymous mappings that ask for
-/// transparent huge pages before their first touch (Linux, THP in "madvise" mode); smaller ones and other
-/// systems use operator new. Fresh mappings matter: heap memory recycled from earlier buffers keeps its
-/// 4 KiB pages.
-void* sr_allocate(std::size_t bytes);
-void sr_deallocate(void* p, std::size_t bytes) noexcept;
-template <class T>
-struct SrAllocator {
-  using value_type = T;
-  SrAllocator() noexcept = default;
-  template <class U> SrAllocator(const SrAllocator<U>&) noexcept {}
-  T* allocate(std::size_t n) { return static_cast<T*>(sr_allocate(n * sizeof(T))); }
-  void deallocate(T* p, std::size_t n) noexcept { sr_deallocate(p, n * sizeof(T)); }
-  template <class U> bool operator==(const SrAllocator<U>&) const noexcept { return true; }
-};
-template <class T> using SrVector = std::vector<T, SrAllocator<T>>;
-}  // namespace detail
 const char* scheme_name(RefinementScheme s) noexcept;
 
 struct SrStats {
@@ -292,10 +275,12 @@ class SrMesh {
   // Face slots are original faces renumbered in vsplit order (Hoppe's implicit layout): the base faces,
   // then fl^ and fr^ of the last collapse, of the one before, and so on. The faces of a coarse mesh are
   // then a prefix of the array, and a vsplit writes fl and fr side by side.
-  detail::SrVector<FaceSlot> faces_;  // one per original face, by slot
-  detail::SrVector<Index> slot_of_, face_of_;  // original face -> slot and back
-  detail::SrVector<Split> splits_;            // per non-leaf node
-  detail::SrVector<NodeSlot> nodes_;  // one per node
+  // An operation touches some twenty scattered cache lines of these arrays; with 4 KiB pages nearly each is
+  // also a TLB miss on a mesh of 10^5-10^6 faces, with 2 MiB pages their translations fit in the TLB.
+  HugeVector<FaceSlot> faces_;  // one per original face, by slot
+  HugeVector<Index> slot_of_, face_of_;  // original face -> slot and back
+  HugeVector<Split> splits_;            // per non-leaf node
+  HugeVector<NodeSlot> nodes_;  // one per node
   std::vector<std::pair<Index, FaceSlot>> base_slots_;  // the base mesh's faces by slot, for reset()
   std::vector<Index> base_corners_;                     // a half-edge of each root, as h_->roots()
   std::vector<Index> active_list_;  // the active nodes, in no particular order

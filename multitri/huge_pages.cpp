@@ -1,0 +1,56 @@
+#include "multitri/huge_pages.hpp"
+
+#include <cstdint>
+#include <new>
+
+// Sanitizers see through operator new only: under ASan (gcc: __SANITIZE_ADDRESS__; clang: __has_feature)
+// every block stays on the heap so that out-of-bounds accesses are still caught.
+#if defined(__SANITIZE_ADDRESS__)
+#define VARMESH_NO_HUGE_PAGES 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define VARMESH_NO_HUGE_PAGES 1
+#endif
+#endif
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
+namespace varmesh {
+
+#if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(VARMESH_NO_HUGE_PAGES)
+namespace {
+constexpr std::size_t kHuge = std::size_t{2} << 20;
+}
+
+void* huge_allocate(std::size_t bytes) {
+  if (bytes >= kHuge) {
+    // Map 2 MiB more and trim, so that the block starts on a huge-page boundary; munmap(p, bytes) frees it.
+    void* m = mmap(nullptr, bytes + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (m == MAP_FAILED) throw std::bad_alloc();
+    const auto at = reinterpret_cast<std::uintptr_t>(m);
+    const std::uintptr_t start = (at + kHuge - 1) & ~(std::uintptr_t{kHuge} - 1);
+    const std::uintptr_t end = start + bytes, map_end = at + bytes + kHuge;
+    const std::uintptr_t page_end = (end + 4095) & ~std::uintptr_t{4095};
+    if (start > at) munmap(m, start - at);
+    if (map_end > page_end) munmap(reinterpret_cast<void*>(page_end), map_end - page_end);
+    madvise(reinterpret_cast<void*>(start), bytes, MADV_HUGEPAGE);
+    return reinterpret_cast<void*>(start);
+  }
+  return ::operator new(bytes);
+}
+
+void huge_deallocate(void* p, std::size_t bytes) noexcept {
+  if (bytes >= kHuge) {
+    munmap(p, bytes);
+    return;
+  }
+  ::operator delete(p, bytes);
+}
+#else
+void* huge_allocate(std::size_t bytes) { return ::operator new(bytes); }
+void huge_deallocate(void* p, std::size_t bytes) noexcept { ::operator delete(p, bytes); }
+#endif
+
+}  // namespace varmesh
