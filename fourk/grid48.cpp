@@ -109,22 +109,25 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
   lh_ = ty_ * s + 1;
   row_of_ = FastDivider(static_cast<std::uint32_t>(lw_));
   if (double(lw_) * double(lh_) > double(1u << 30)) throw InvalidInput("Grid48: grid too large (more than 2^30 lattice points)");
-  z_.resize(lw_ * lh_);
-  for (std::size_t y = 0; y < lh_; ++y) {
-    const std::size_t yy = std::min(y, height_ - 1);
-    for (std::size_t x = 0; x < lw_; ++x) z_[y * lw_ + x] = field.z[yy * width_ + std::min(x, width_ - 1)];
-  }
+  // Heights straight into the records (padding repeats the last row and column); errors come later.
   records_.resize(lw_ * lh_);
-  for (std::size_t p = 0; p < records_.size(); ++p) records_[p] = {0.0f, z_[p]};
+  for (std::size_t y = 0; y < lh_; ++y) {
+    const float* src = field.z.data() + std::min(y, height_ - 1) * width_;
+    PointRecord* dst = records_.data() + y * lw_;
+    for (std::size_t x = 0; x < width_; ++x) dst[x] = {0.0f, src[x]};
+    for (std::size_t x = width_; x < lw_; ++x) dst[x] = {0.0f, src[width_ - 1]};
+  }
   if (options.reference_scan) {
+    z_.resize(lw_ * lh_);
+    for (std::size_t p = 0; p < records_.size(); ++p) z_[p] = records_[p].z;
     compute_errors();
     compute_radii();
+    for (std::size_t p = 0; p < records_.size(); ++p) records_[p].error = error_[p];
+    z_ = {};
+    error_ = {};
   } else {
     compute_bounds_fast(options.exact_errors);
   }
-  for (std::size_t p = 0; p < records_.size(); ++p) records_[p].error = error_[p];
-  z_ = {};
-  error_ = {};
   build_histogram();
 }
 
@@ -196,7 +199,6 @@ std::size_t Grid48::max_faces_above(float threshold) const noexcept {
 // left of the centre (or below it, on a vertical line), side 1 the other.
 void Grid48::compute_bounds_fast(bool exact) {
   const std::size_t n = lw_ * lh_;
-  error_.assign(n, 0.0f);
   radius_.assign(n, 0.0f);
   // Per triangle (2 per lattice point): the range of h - plane over its grid samples, empty by default.
   HugeVector<float> ranges(4 * n);
@@ -206,7 +208,7 @@ void Grid48::compute_bounds_fast(bool exact) {
   std::fill(rmax, rmax + 2 * n, -3.0e38f);
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
   const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
-  const float* z = z_.data();
+  PointRecord* const rec = records_.data();  // heights in, errors out
   auto in_grid = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return x <= last_x && y <= last_y; };
   // Range of the child triangle with apex (px, py) and hypotenuse (ax, ay)-(bx, by).
   auto child_range = [&](std::ptrdiff_t px, std::ptrdiff_t py, std::ptrdiff_t ax, std::ptrdiff_t ay, std::ptrdiff_t bx,
@@ -238,10 +240,10 @@ void Grid48::compute_bounds_fast(bool exact) {
     std::ptrdiff_t ax, ay, bx, by, cx, cy;
   };
   auto exact_range = [&](const Tri& t, float& out_lo, float& out_hi) {
-    const PlaneXY pl(double(t.ax), double(t.ay), z[t.ay * w + t.ax], double(t.bx), double(t.by), z[t.by * w + t.bx],
-                     double(t.cx), double(t.cy), z[t.cy * w + t.cx]);
+    const PlaneXY pl(double(t.ax), double(t.ay), rec[t.ay * w + t.ax].z, double(t.bx), double(t.by), rec[t.by * w + t.bx].z,
+                     double(t.cx), double(t.cy), rec[t.cy * w + t.cx].z);
     auto res = [&](std::ptrdiff_t px, std::ptrdiff_t py) {
-      return double(z[py * w + px]) - (pl.base + pl.gx * double(px) + pl.gy * double(py));
+      return double(rec[py * w + px].z) - (pl.base + pl.gx * double(px) + pl.gy * double(py));
     };
     double lo = 1e300, hi = -1e300;
     auto sample = [&](std::ptrdiff_t px, std::ptrdiff_t py) {
@@ -312,11 +314,11 @@ void Grid48::compute_bounds_fast(bool exact) {
     const Corners cn = corners(x, y, d, ld, square);
     const std::ptrdiff_t bx = cn.bx, by = cn.by, cx = cn.cx, cy = cn.cy;
     const std::ptrdiff_t a0x = cn.ax[0], a0y = cn.ay[0], a1x = cn.ax[1], a1y = cn.ay[1];
-    const double hb = z[by * w + bx], hc = z[cy * w + cx], hm = z[p];
+    const double hb = rec[by * w + bx].z, hc = rec[cy * w + cx].z, hm = rec[p].z;
     const double delta = hm - 0.5 * (hb + hc);
     const float dlo = static_cast<float>(std::min(0.0, delta)), dhi = static_cast<float>(std::max(0.0, delta));
     float err = 0.0f;
-    const glm::vec3 centre(float(x) * sx_, float(y) * sy_, z[p]);
+    const glm::vec3 centre(float(x) * sx_, float(y) * sy_, rec[p].z);
     float r = 0.0f;
     for (int k = 0; k < 2; ++k) {
       const std::ptrdiff_t ax = k == 0 ? a0x : a1x, ay = k == 0 ? a0y : a1y;
@@ -347,16 +349,16 @@ void Grid48::compute_bounds_fast(bool exact) {
       }
       rmin[2 * p + static_cast<std::size_t>(side)] = lo;
       rmax[2 * p + static_cast<std::size_t>(side)] = hi;
-      const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, z[ay * w + ax]);
+      const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, rec[ay * w + ax].z);
       r = std::max(r, glm::length(apex - centre));
     }
     r = std::max({r, glm::length(glm::vec3(float(bx) * sx_, float(by) * sy_, float(hb)) - centre),
                   glm::length(glm::vec3(float(cx) * sx_, float(cy) * sy_, float(hc)) - centre)});
     for_each_child(static_cast<Index>(p), [&](Index ch) {
-      err = std::max(err, error_[ch]);
+      err = std::max(err, rec[ch].error);
       r = std::max(r, glm::length(position(ch) - centre) + radius_[ch]);
     });
-    error_[p] = err;
+    rec[p].error = err;
     radius_[p] = r * (1.0f + 1e-6f);
   };
   if (exact) {
@@ -373,7 +375,6 @@ void Grid48::compute_bounds_fast(bool exact) {
   for (std::ptrdiff_t y = 0; y < h; ++y) rowy[y] = float(y) * sy_;
   float* const lo_of = rmin;
   float* const hi_of = rmax;
-  float* const err_of = error_.data();
   float* const rad_of = radius_.data();
   struct Layout {
     std::ptrdiff_t px[4], py[4], pl[4];  // corners a0, a1, b, c: offsets in x, y and index
@@ -412,9 +413,12 @@ void Grid48::compute_bounds_fast(bool exact) {
     for (std::ptrdiff_t x = x0; x <= x1; x += 2 * d, parity ^= 1) {
       const Layout& l = lay[square ? parity : 0];
       const std::ptrdiff_t p = y * w + x;
-      const float zp = z[p], rx = colx[x];
-      const double delta = double(zp) - 0.5 * (double(z[p + l.pl[2]]) + double(z[p + l.pl[3]]));
-      const float dlo = static_cast<float>(std::min(0.0, delta)), dhi = static_cast<float>(std::max(0.0, delta));
+      const float zp = rec[p].z, rx = colx[x];
+      const double delta = double(zp) - 0.5 * (double(rec[p + l.pl[2]].z) + double(rec[p + l.pl[3]].z));
+      // visit()'s min(0, delta) and max(0, delta) rounded to float, written so that they compile to minss
+      // and maxss: the sign of delta is a coin toss, a branch on it mispredicts half the time.
+      const float df = static_cast<float>(delta);
+      const float dlo = df < 0.0f ? df : 0.0f, dhi = df > 0.0f ? df : 0.0f;
       float side_err[2];
       for (int k = 0; k < 2; ++k) {
         float lo0 = 0.0f, hi0 = 0.0f, lo1 = 0.0f, hi1 = 0.0f;
@@ -433,7 +437,7 @@ void Grid48::compute_bounds_fast(bool exact) {
       // Maxima are exact, so trees of independent terms give visit()'s values; sqrt is monotone, so the
       // root of the largest squared corner distance is the largest corner distance.
       auto sq = [&](std::ptrdiff_t ox, std::ptrdiff_t oy, std::ptrdiff_t ol) {
-        const glm::vec3 v(colx[x + ox] - rx, rowy[y + oy] - ry, z[p + ol] - zp);
+        const glm::vec3 v(colx[x + ox] - rx, rowy[y + oy] - ry, rec[p + ol].z - zp);
         return glm::dot(v, v);
       };
       float r = std::sqrt(std::max(std::max(sq(l.px[0], l.py[0], l.pl[0]), sq(l.px[1], l.py[1], l.pl[1])),
@@ -442,13 +446,13 @@ void Grid48::compute_bounds_fast(bool exact) {
       if (!finest) {
         float ce[4], cr[4];
         for (int i = 0; i < 4; ++i) {
-          ce[i] = err_of[p + l.ql[i]];
+          ce[i] = rec[p + l.ql[i]].error;
           cr[i] = std::sqrt(sq(l.qx[i], l.qy[i], l.ql[i])) + rad_of[p + l.ql[i]];
         }
         err = std::max(err, std::max(std::max(ce[0], ce[1]), std::max(ce[2], ce[3])));
         r = std::max(r, std::max(std::max(cr[0], cr[1]), std::max(cr[2], cr[3])));
       }
-      err_of[p] = err;
+      rec[p].error = err;
       rad_of[p] = r * (1.0f + 1e-6f);
     }
   };

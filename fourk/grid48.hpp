@@ -172,7 +172,8 @@ class Grid48 {
   int log2_tile_ = 0;
   float sx_ = 1.0f, sy_ = 1.0f;
   FastDivider row_of_;
-  // Build scratch, released when the hierarchy is built: heights as contiguous rows, errors.
+  // Scratch of the reference scan (Grid48Options::reference_scan), released when the hierarchy is built:
+  // heights as contiguous rows, errors. The other builds work in records_ directly.
   HugeVector<float> z_;      // lattice heights (padding repeats the border)
   HugeVector<float> error_;  // per lattice point (0 for tile corners)
   HugeVector<PointRecord> records_;  // per lattice point: error, height
