@@ -187,6 +187,48 @@ std::size_t Grid48::max_faces_above(float threshold) const noexcept {
   return 2 * tx_ * ty_ + faces_above_[histogram_slot(threshold)];
 }
 
+namespace {
+
+// The diamond at (x, y) of size d = 2^ld: hypotenuse ends (b, c) and the two apexes (either may lie
+// outside the lattice).
+struct Corners {
+  std::ptrdiff_t bx, by, cx, cy, ax[2], ay[2];
+};
+Corners diamond_corners(std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
+  Corners k;
+  if (square) {
+    const std::ptrdiff_t qx = (((x - d) >> (ld + 1)) & 1) != 0 ? x - d : x + d;
+    const std::ptrdiff_t qy = (((y - d) >> (ld + 1)) & 1) != 0 ? y - d : y + d;
+    k = {qx, qy, 2 * x - qx, 2 * y - qy, {2 * x - qx, qx}, {qy, 2 * y - qy}};
+  } else if (((y >> ld) & 1) == 0) {  // horizontal split edge
+    k = {x - d, y, x + d, y, {x, x}, {y - d, y + d}};
+  } else {  // vertical split edge
+    k = {x, y - d, x, y + d, {x - d, x + d}, {y, y}};
+  }
+  return k;
+}
+
+// Calls fn(x, y, d, ld, square, x_begin, x_end) for every row of diamonds, finest level first (edge
+// diamonds of size d, then squares of size d, for d = 1, 2, 4, ...): the row's diamonds are at
+// x_begin, x_begin + 2d, ... < x_end. A diamond reads only finer levels (and, for squares, the edge
+// diamonds of its own size), so the rows of one pass may run in any order.
+template <class Fn>
+void for_each_diamond_row(std::ptrdiff_t w, std::ptrdiff_t h, int log2_tile, Fn&& fn) {
+  for (int ld = 0; ld < log2_tile; ++ld) {
+    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
+    for (int pass = 0; pass < 2; ++pass) {
+      const bool square = pass == 1;
+      for (std::ptrdiff_t y = 0; y < h; y += d) {
+        const bool yodd = ((y >> ld) & 1) != 0;
+        if (square && !yodd) continue;
+        fn(y, d, ld, square, (square || !yodd) ? d : 0, w);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 // Bottom-up error bounds (signed residual ranges) and nested radii in one finest-first pass.
 //
 // For a triangle T split at the midpoint m of its hypotenuse (b, c) into children c0, c1: over a child,
@@ -200,12 +242,13 @@ std::size_t Grid48::max_faces_above(float threshold) const noexcept {
 void Grid48::compute_bounds_fast(bool exact) {
   const std::size_t n = lw_ * lh_;
   radius_.assign(n, 0.0f);
+  if (exact) compute_exact_errors();  // then only the radii below
   // Per triangle (2 per lattice point): the range of h - plane over its grid samples, empty by default.
-  HugeVector<float> ranges(4 * n);
+  HugeVector<float> ranges(exact ? 0 : 4 * n);
   float* const rmin = ranges.data();
-  float* const rmax = rmin + 2 * n;
-  std::fill(rmin, rmin + 2 * n, 3.0e38f);
-  std::fill(rmax, rmax + 2 * n, -3.0e38f);
+  float* const rmax = exact ? nullptr : rmin + 2 * n;
+  std::fill(rmin, rmin + (exact ? 0 : 2 * n), 3.0e38f);
+  std::fill(rmax, rmax + (exact ? 0 : 2 * n), -3.0e38f);
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
   const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
   PointRecord* const rec = records_.data();  // heights in, errors out
@@ -230,88 +273,11 @@ void Grid48::compute_bounds_fast(bool exact) {
     lo = rmin[t];
     hi = rmax[t];
   };
-  // Exact range of h - plane_T over the grid samples of triangle T = (a; b, c) (apex a, hypotenuse b-c),
-  // by branch and bound over T's sub-triangles, whose exact ranges (relative to their own planes) are
-  // already known: over a sub-triangle q, h - plane_T = (h - plane_q) + (plane_q - plane_T), and the
-  // second term is linear, so its extremes are at q's corners, where it equals h - plane_T. A sub-triangle
-  // is opened only if that bound could beat the best value found so far; values are only ever taken at
-  // real samples (corners and hypotenuse midpoints), so the result is the exact maximum and minimum.
-  struct Tri {
-    std::ptrdiff_t ax, ay, bx, by, cx, cy;
-  };
-  auto exact_range = [&](const Tri& t, float& out_lo, float& out_hi) {
-    const PlaneXY pl(double(t.ax), double(t.ay), rec[t.ay * w + t.ax].z, double(t.bx), double(t.by), rec[t.by * w + t.bx].z,
-                     double(t.cx), double(t.cy), rec[t.cy * w + t.cx].z);
-    auto res = [&](std::ptrdiff_t px, std::ptrdiff_t py) {
-      return double(rec[py * w + px].z) - (pl.base + pl.gx * double(px) + pl.gy * double(py));
-    };
-    double lo = 1e300, hi = -1e300;
-    auto sample = [&](std::ptrdiff_t px, std::ptrdiff_t py) {
-      if (!in_grid(px, py)) return;
-      const double v = res(px, py);
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    };
-    sample(t.ax, t.ay);
-    sample(t.bx, t.by);
-    sample(t.cx, t.cy);
-    Tri stack[160];
-    int top = 0;
-    stack[top++] = t;
-    bool first = true;
-    while (top > 0) {
-      const Tri q = stack[--top];
-      const std::ptrdiff_t sx = q.bx + q.cx, sy = q.by + q.cy;
-      if (((sx | sy) & 1) != 0) continue;  // finest: its only samples are its corners, already seen
-      const std::ptrdiff_t mx = sx / 2, my = sy / 2;
-      if (!first) {
-        const int side = (q.ax < mx || (q.ax == mx && q.ay < my)) ? 0 : 1;
-        const std::size_t id = 2 * static_cast<std::size_t>(my * w + mx) + static_cast<std::size_t>(side);
-        const float qlo = rmin[id], qhi = rmax[id];
-        if (qlo > qhi) continue;  // no grid sample inside
-        const double la = res(q.ax, q.ay), lb = res(q.bx, q.by), lc = res(q.cx, q.cy);
-        const double ub = double(qhi) + std::max({la, lb, lc}), lb2 = double(qlo) + std::min({la, lb, lc});
-        if (ub <= hi && lb2 >= lo) continue;
-      }
-      first = false;
-      sample(mx, my);
-      stack[top++] = Tri{mx, my, q.ax, q.ay, q.bx, q.by};
-      stack[top++] = Tri{mx, my, q.cx, q.cy, q.ax, q.ay};
-    }
-    if (lo > hi) {
-      out_lo = 3.0e38f;
-      out_hi = -3.0e38f;
-      return;
-    }
-    // Outward rounding to float keeps the stored range a bound.
-    out_lo = static_cast<float>(lo);
-    if (double(out_lo) > lo) out_lo = std::nextafter(out_lo, -3.0e38f);
-    out_hi = static_cast<float>(hi);
-    if (double(out_hi) < hi) out_hi = std::nextafter(out_hi, 3.0e38f);
-  };
-  // The diamond at (x, y) of size d = 2^ld: hypotenuse ends (b, c) and the two apexes (either may lie
-  // outside the lattice).
-  struct Corners {
-    std::ptrdiff_t bx, by, cx, cy, ax[2], ay[2];
-  };
-  auto corners = [](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
-    Corners k;
-    if (square) {
-      const std::ptrdiff_t qx = (((x - d) >> (ld + 1)) & 1) != 0 ? x - d : x + d;
-      const std::ptrdiff_t qy = (((y - d) >> (ld + 1)) & 1) != 0 ? y - d : y + d;
-      k = {qx, qy, 2 * x - qx, 2 * y - qy, {2 * x - qx, qx}, {qy, 2 * y - qy}};
-    } else if (((y >> ld) & 1) == 0) {  // horizontal split edge
-      k = {x - d, y, x + d, y, {x, x}, {y - d, y + d}};
-    } else {  // vertical split edge
-      k = {x, y - d, x, y + d, {x - d, x + d}, {y, y}};
-    }
-    return k;
-  };
-  // Any diamond, near the padding or not, with either kind of error.
+  // Any diamond, near the padding or not.
   auto visit = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
     const int ld = grid48_detail::ctz(static_cast<std::size_t>(d));
     const std::size_t p = static_cast<std::size_t>(y * w + x);
-    const Corners cn = corners(x, y, d, ld, square);
+    const Corners cn = diamond_corners(x, y, d, ld, square);
     const std::ptrdiff_t bx = cn.bx, by = cn.by, cx = cn.cx, cy = cn.cy;
     const std::ptrdiff_t a0x = cn.ax[0], a0y = cn.ay[0], a1x = cn.ax[1], a1y = cn.ay[1];
     const double hb = rec[by * w + bx].z, hc = rec[cy * w + cx].z, hm = rec[p].z;
@@ -325,10 +291,7 @@ void Grid48::compute_bounds_fast(bool exact) {
       if (ax < 0 || ay < 0 || ax >= w || ay >= h) continue;
       const int side = (ax < x || (ax == x && ay < y)) ? 0 : 1;
       float lo = 3.0e38f, hi = -3.0e38f;
-      if (exact) {
-        exact_range(Tri{ax, ay, bx, by, cx, cy}, lo, hi);
-        if (lo <= hi) err = std::max({err, hi, -lo});
-      } else {
+      if (!exact) {
         float lo0, hi0, lo1, hi1;
         child_range(x, y, ax, ay, bx, by, lo0, hi0);
         child_range(x, y, cx, cy, ax, ay, lo1, hi1);
@@ -347,8 +310,10 @@ void Grid48::compute_bounds_fast(bool exact) {
           err = std::max({err, hi, -lo});
         }
       }
-      rmin[2 * p + static_cast<std::size_t>(side)] = lo;
-      rmax[2 * p + static_cast<std::size_t>(side)] = hi;
+      if (!exact) {
+        rmin[2 * p + static_cast<std::size_t>(side)] = lo;
+        rmax[2 * p + static_cast<std::size_t>(side)] = hi;
+      }
       const glm::vec3 apex(float(ax) * sx_, float(ay) * sy_, rec[ay * w + ax].z);
       r = std::max(r, glm::length(apex - centre));
     }
@@ -358,16 +323,12 @@ void Grid48::compute_bounds_fast(bool exact) {
       err = std::max(err, rec[ch].error);
       r = std::max(r, glm::length(position(ch) - centre) + radius_[ch]);
     });
-    rec[p].error = err;
+    if (!exact) rec[p].error = err;
     radius_[p] = r * (1.0f + 1e-6f);
   };
-  if (exact) {
-    for_each_diamond_finest_first(w, h, log2_tile_, visit);
-    return;
-  }
 
-  // The fast bound of the diamonds whose corners are all grid samples (all but a thin band along the
-  // padding), a row at a time. Along a row the corners, children and child triangles sit at the same
+  // The diamonds whose corners are all grid samples (all but a thin band along the padding), a row at a
+  // time. Along a row the corners, children and child triangles sit at the same
   // offsets from the diamond (squares alternate between two layouts), so those are worked out once per
   // row from the general corner rule; every value is computed as visit() would compute it.
   std::vector<float> colx(lw_), rowy(lh_);
@@ -383,7 +344,7 @@ void Grid48::compute_bounds_fast(bool exact) {
     std::ptrdiff_t qx[4], qy[4], ql[4];   // children diamonds
   };
   auto layout = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
-    const Corners cn = corners(x, y, d, ld, square);
+    const Corners cn = diamond_corners(x, y, d, ld, square);
     Layout l;
     const std::ptrdiff_t kx[4] = {cn.ax[0], cn.ax[1], cn.bx, cn.cx}, ky[4] = {cn.ay[0], cn.ay[1], cn.by, cn.cy};
     for (int j = 0; j < 4; ++j) l.px[j] = kx[j] - x, l.py[j] = ky[j] - y, l.pl[j] = l.py[j] * w + l.px[j];
@@ -419,8 +380,8 @@ void Grid48::compute_bounds_fast(bool exact) {
       // and maxss: the sign of delta is a coin toss, a branch on it mispredicts half the time.
       const float df = static_cast<float>(delta);
       const float dlo = df < 0.0f ? df : 0.0f, dhi = df > 0.0f ? df : 0.0f;
-      float side_err[2];
-      for (int k = 0; k < 2; ++k) {
+      float side_err[2] = {0.0f, 0.0f};
+      for (int k = 0; k < 2 && !exact; ++k) {
         float lo0 = 0.0f, hi0 = 0.0f, lo1 = 0.0f, hi1 = 0.0f;
         if (!finest) {
           lo0 = lo_of[2 * p + l.t0[k]], hi0 = hi_of[2 * p + l.t0[k]];
@@ -447,12 +408,20 @@ void Grid48::compute_bounds_fast(bool exact) {
         float ce[4], cr[4];
         for (int i = 0; i < 4; ++i) {
           ce[i] = rec[p + l.ql[i]].error;
-          cr[i] = std::sqrt(sq(l.qx[i], l.qy[i], l.ql[i])) + rad_of[p + l.ql[i]];
+          cr[i] = sq(l.qx[i], l.qy[i], l.ql[i]);
         }
+#if defined(__SSE2__)
+        // The four roots in one instruction (sqrtps rounds each lane as sqrtss would).
+        const __m128 rr = _mm_add_ps(_mm_sqrt_ps(_mm_loadu_ps(cr)), _mm_setr_ps(rad_of[p + l.ql[0]], rad_of[p + l.ql[1]],
+                                                                                  rad_of[p + l.ql[2]], rad_of[p + l.ql[3]]));
+        _mm_storeu_ps(cr, rr);
+#else
+        for (int i = 0; i < 4; ++i) cr[i] = std::sqrt(cr[i]) + rad_of[p + l.ql[i]];
+#endif
         err = std::max(err, std::max(std::max(ce[0], ce[1]), std::max(ce[2], ce[3])));
         r = std::max(r, std::max(std::max(cr[0], cr[1]), std::max(cr[2], cr[3])));
       }
-      rec[p].error = err;
+      if (!exact) rec[p].error = err;
       rad_of[p] = r * (1.0f + 1e-6f);
     }
   };
@@ -494,7 +463,26 @@ namespace {
 // Largest |row[x] - (b + g x)| for x in [x0, x1].
 inline double span_error(const float* row, std::ptrdiff_t x0, std::ptrdiff_t x1, double b, double g) {
   double worst = 0.0;
-  for (std::ptrdiff_t x = x0; x <= x1; ++x) {
+  std::ptrdiff_t x = x0;
+#if defined(__SSE2__)
+  // Four samples a step in two pairs of double lanes, each lane computing what the loop below computes.
+  if (x1 - x0 >= 7) {
+    const __m128d vb = _mm_set1_pd(b), vg = _mm_set1_pd(g), sign = _mm_set1_pd(-0.0), four = _mm_set1_pd(4.0);
+    __m128d xa = _mm_setr_pd(double(x0), double(x0 + 1)), xb = _mm_setr_pd(double(x0 + 2), double(x0 + 3));
+    __m128d wa = _mm_setzero_pd(), wb = _mm_setzero_pd();
+    for (; x + 3 <= x1; x += 4) {
+      const __m128 h = _mm_loadu_ps(row + x);
+      const __m128d ha = _mm_cvtps_pd(h), hb = _mm_cvtps_pd(_mm_movehl_ps(h, h));
+      wa = _mm_max_pd(wa, _mm_andnot_pd(sign, _mm_sub_pd(ha, _mm_add_pd(vb, _mm_mul_pd(vg, xa)))));
+      wb = _mm_max_pd(wb, _mm_andnot_pd(sign, _mm_sub_pd(hb, _mm_add_pd(vb, _mm_mul_pd(vg, xb)))));
+      xa = _mm_add_pd(xa, four);
+      xb = _mm_add_pd(xb, four);
+    }
+    const __m128d m = _mm_max_pd(wa, wb);
+    worst = std::max(_mm_cvtsd_f64(m), _mm_cvtsd_f64(_mm_unpackhi_pd(m, m)));
+  }
+#endif
+  for (; x <= x1; ++x) {
     const double d = double(row[x]) - (b + g * double(x));
     worst = std::max(worst, std::abs(d));
   }
@@ -507,75 +495,180 @@ inline double span_error(const float* row, std::ptrdiff_t x0, std::ptrdiff_t x1,
 // diamond's split edge, and each part is compared with the plane of the triangle it lies in (samples on
 // the split edge lie on both planes' common line, so either plane gives their residual). Each level's
 // diamonds tile the lattice once, so a level costs one pass over the samples.
+double Grid48::scan_own_error(std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) const {
+  const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
+  const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
+  if (x - d > last_x || y - d > last_y) return 0.0;  // only samples inside the grid count (padding repeats the border)
+  auto zat = [&](std::ptrdiff_t px, std::ptrdiff_t py) { return double(z_[static_cast<std::size_t>(py * w + px)]); };
+  double e = 0.0;
+  if (square) {
+    // Diagonal from (cx, cy) (odd multiples of 2d) to the opposite corner; the off-diagonal corners are
+    // the apexes of the two halves, one on the left column (x - d), one on the right (x + d).
+    const int ld = grid48_detail::ctz(static_cast<std::size_t>(d));
+    const std::ptrdiff_t cx = (((x - d) >> (ld + 1)) & 1) != 0 ? x - d : x + d;
+    const std::ptrdiff_t cy = (((y - d) >> (ld + 1)) & 1) != 0 ? y - d : y + d;
+    const std::ptrdiff_t ox = 2 * x - cx, oy = 2 * y - cy;
+    // Off corners: (ox, cy) and (cx, oy).
+    const bool first_left = ox == x - d;
+    const std::ptrdiff_t lx = first_left ? ox : cx, ly = first_left ? cy : oy;
+    const std::ptrdiff_t rx = first_left ? cx : ox, ry = first_left ? oy : cy;
+    const PlaneXY left(double(lx), double(ly), zat(lx, ly), double(cx), double(cy), zat(cx, cy), double(ox), double(oy), zat(ox, oy));
+    const PlaneXY right(double(rx), double(ry), zat(rx, ry), double(cx), double(cy), zat(cx, cy), double(ox), double(oy), zat(ox, oy));
+    const std::ptrdiff_t slope = (ox - cx) * (oy - cy) > 0 ? 1 : -1;  // diagonal x - x_c = slope (y - y_c)
+    const std::ptrdiff_t y1 = std::min(y + d, last_y);
+    const std::ptrdiff_t xr = std::min(x + d, last_x);
+    for (std::ptrdiff_t yy = y - d; yy <= y1; ++yy) {
+      const std::ptrdiff_t split = x + slope * (yy - y);
+      const float* row = z_.data() + yy * w;
+      e = std::max(e, span_error(row, x - d, std::min(split, last_x), left.base + left.gy * double(yy), left.gx));
+      if (split <= last_x) e = std::max(e, span_error(row, split, xr, right.base + right.gy * double(yy), right.gx));
+    }
+  } else {
+    const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+    const bool horizontal = lx < ly;  // split edge along x, apexes below and above
+    // Triangle apexes: (below|left) and (above|right); missing outside the lattice.
+    const std::ptrdiff_t ax0 = horizontal ? x : x - d, ay0 = horizontal ? y - d : y;
+    const std::ptrdiff_t ax1 = horizontal ? x : x + d, ay1 = horizontal ? y + d : y;
+    const std::ptrdiff_t ex0 = horizontal ? x - d : x, ey0 = horizontal ? y : y - d;
+    const std::ptrdiff_t ex1 = horizontal ? x + d : x, ey1 = horizontal ? y : y + d;
+    const bool has0 = ax0 >= 0 && ay0 >= 0, has1 = ax1 < w && ay1 < h;
+    PlaneXY p0(0, 0, 0, 1, 0, 0, 0, 1, 0), p1(0, 0, 0, 1, 0, 0, 0, 1, 0);
+    if (has0) p0 = PlaneXY(double(ax0), double(ay0), zat(ax0, ay0), double(ex0), double(ey0), zat(ex0, ey0), double(ex1), double(ey1), zat(ex1, ey1));
+    if (has1) p1 = PlaneXY(double(ax1), double(ay1), zat(ax1, ay1), double(ex0), double(ey0), zat(ex0, ey0), double(ex1), double(ey1), zat(ex1, ey1));
+    const std::ptrdiff_t y0 = std::max<std::ptrdiff_t>(y - d, 0), y1 = std::min(y + d, last_y);
+    for (std::ptrdiff_t yy = y0; yy <= y1; ++yy) {
+      const std::ptrdiff_t half = d - std::abs(yy - y);
+      const std::ptrdiff_t xa = std::max<std::ptrdiff_t>(x - half, 0), xb = std::min(x + half, last_x);
+      if (xa > xb) continue;
+      const float* row = z_.data() + yy * w;
+      if (horizontal) {
+        const PlaneXY& pl = yy < y ? p0 : p1;
+        if ((yy < y && !has0) || (yy > y && !has1)) continue;
+        const PlaneXY& use = yy == y ? (has0 ? p0 : p1) : pl;
+        e = std::max(e, span_error(row, xa, xb, use.base + use.gy * double(yy), use.gx));
+      } else {
+        if (has0 && xa <= std::min(x, xb)) e = std::max(e, span_error(row, xa, std::min(x, xb), p0.base + p0.gy * double(yy), p0.gx));
+        if (has1 && x <= xb) e = std::max(e, span_error(row, std::max(x, xa), xb, p1.base + p1.gy * double(yy), p1.gx));
+      }
+    }
+  }
+  return e;
+}
+
+// The reference for compute_exact_errors(): every diamond scanned by scan_own_error(), into error_.
 void Grid48::compute_errors() {
   error_.assign(lw_ * lh_, 0.0f);
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
-  const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
-  auto zat = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return double(z_[static_cast<std::size_t>(y * w + x)]); };
-  auto own_error = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
-    double e = 0.0;
-    if (square) {
-      // Diagonal from (cx, cy) (odd multiples of 2d) to the opposite corner; the off-diagonal corners are
-      // the apexes of the two halves, one on the left column (x - d), one on the right (x + d).
-      const std::ptrdiff_t cx = ((x - d) / (2 * d)) % 2 != 0 ? x - d : x + d;
-      const std::ptrdiff_t cy = ((y - d) / (2 * d)) % 2 != 0 ? y - d : y + d;
-      const std::ptrdiff_t ox = 2 * x - cx, oy = 2 * y - cy;
-      // Off corners: (ox, cy) and (cx, oy).
-      const bool first_left = ox == x - d;
-      const std::ptrdiff_t lx = first_left ? ox : cx, ly = first_left ? cy : oy;
-      const std::ptrdiff_t rx = first_left ? cx : ox, ry = first_left ? oy : cy;
-      const PlaneXY left(double(lx), double(ly), zat(lx, ly), double(cx), double(cy), zat(cx, cy), double(ox), double(oy), zat(ox, oy));
-      const PlaneXY right(double(rx), double(ry), zat(rx, ry), double(cx), double(cy), zat(cx, cy), double(ox), double(oy), zat(ox, oy));
-      const std::ptrdiff_t slope = (ox - cx) * (oy - cy) > 0 ? 1 : -1;  // diagonal x - x_c = slope (y - y_c)
-      const std::ptrdiff_t y1 = std::min(y + d, last_y);
-      const std::ptrdiff_t xr = std::min(x + d, last_x);
-      for (std::ptrdiff_t yy = y - d; yy <= y1; ++yy) {
-        const std::ptrdiff_t split = x + slope * (yy - y);
-        const float* row = z_.data() + yy * w;
-        e = std::max(e, span_error(row, x - d, std::min(split, last_x), left.base + left.gy * double(yy), left.gx));
-        if (split <= last_x) e = std::max(e, span_error(row, split, xr, right.base + right.gy * double(yy), right.gx));
-      }
-    } else {
-      const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
-      const bool horizontal = lx < ly;  // split edge along x, apexes below and above
-      // Triangle apexes: (below|left) and (above|right); missing outside the lattice.
-      const std::ptrdiff_t ax0 = horizontal ? x : x - d, ay0 = horizontal ? y - d : y;
-      const std::ptrdiff_t ax1 = horizontal ? x : x + d, ay1 = horizontal ? y + d : y;
-      const std::ptrdiff_t ex0 = horizontal ? x - d : x, ey0 = horizontal ? y : y - d;
-      const std::ptrdiff_t ex1 = horizontal ? x + d : x, ey1 = horizontal ? y : y + d;
-      const bool has0 = ax0 >= 0 && ay0 >= 0, has1 = ax1 < w && ay1 < h;
-      PlaneXY p0(0, 0, 0, 1, 0, 0, 0, 1, 0), p1(0, 0, 0, 1, 0, 0, 0, 1, 0);
-      if (has0) p0 = PlaneXY(double(ax0), double(ay0), zat(ax0, ay0), double(ex0), double(ey0), zat(ex0, ey0), double(ex1), double(ey1), zat(ex1, ey1));
-      if (has1) p1 = PlaneXY(double(ax1), double(ay1), zat(ax1, ay1), double(ex0), double(ey0), zat(ex0, ey0), double(ex1), double(ey1), zat(ex1, ey1));
-      const std::ptrdiff_t y0 = std::max<std::ptrdiff_t>(y - d, 0), y1 = std::min(y + d, last_y);
-      for (std::ptrdiff_t yy = y0; yy <= y1; ++yy) {
-        const std::ptrdiff_t half = d - std::abs(yy - y);
-        const std::ptrdiff_t xa = std::max<std::ptrdiff_t>(x - half, 0), xb = std::min(x + half, last_x);
-        if (xa > xb) continue;
-        const float* row = z_.data() + yy * w;
-        if (horizontal) {
-          const PlaneXY& pl = yy < y ? p0 : p1;
-          if ((yy < y && !has0) || (yy > y && !has1)) continue;
-          const PlaneXY& use = yy == y ? (has0 ? p0 : p1) : pl;
-          e = std::max(e, span_error(row, xa, xb, use.base + use.gy * double(yy), use.gx));
-        } else {
-          if (has0 && xa <= std::min(x, xb)) e = std::max(e, span_error(row, xa, std::min(x, xb), p0.base + p0.gy * double(yy), p0.gx));
-          if (has1 && x <= xb) e = std::max(e, span_error(row, std::max(x, xa), xb, p1.base + p1.gy * double(yy), p1.gx));
-        }
-      }
-    }
-    return e;
-  };
   // Finest level first so that children are saturated before their parents.
   for_each_diamond_finest_first(w, h, log2_tile_, [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
       const int pass = square ? 1 : 0;
       const Index p = static_cast<Index>(y * w + x);
-      // Samples covered: only rows/columns inside the grid count (padding repeats the border).
-      double e = (x - d > last_x || y - d > last_y) ? 0.0 : own_error(x, y, d, pass == 1);
+      const double e = scan_own_error(x, y, d, pass == 1);
       float sat = round_up(e);
       for_each_child(p, [&](Index c) { sat = std::max(sat, error_[c]); });
       error_[p] = sat;
     });
+}
+
+// Exact node errors, finest first, into records_. Diamonds of size d <= 4 away from the padding (most of
+// the diamonds, and the ones whose few samples made scan_own_error() costly per sample) use per-row lists:
+// for each sample of each triangle its offset and its barycentric weights in the triangle's corners. On
+// the lattice those weights are dyadic (twice a triangle's area is a power of two), so the plane at a
+// sample is a weighted sum of three heights, with nothing to set up per diamond. Larger diamonds, and
+// those near the padding, are scanned row by row as compute_errors() does.
+void Grid48::compute_exact_errors() {
+  const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
+  const std::ptrdiff_t last_x = static_cast<std::ptrdiff_t>(width_) - 1, last_y = static_cast<std::ptrdiff_t>(height_) - 1;
+  z_.resize(lw_ * lh_);
+  for (std::size_t p = 0; p < records_.size(); ++p) z_[p] = records_[p].z;
+  PointRecord* const rec = records_.data();
+  struct Sample {
+    std::ptrdiff_t off;
+    double wa, wb, wc;
+  };
+  struct TriList {
+    std::ptrdiff_t a, b, c;  // corner offsets
+    std::vector<Sample> samples;
+    std::ptrdiff_t child[4];  // the diamond's children (in the first list only), 0 for none
+  };
+  // The samples of the diamond at (x, y) other than its corners, per triangle (apex a, hypotenuse b-c;
+  // samples on the hypotenuse are in both, with the same plane value).
+  auto make_lists = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square, TriList (&out)[2]) {
+    const Corners cn = diamond_corners(x, y, d, ld, square);
+    // Children as in for_each_child: a square's side midpoints, the squares of size d / 2 around an edge
+    // diamond (none at the finest level: offset 0 reads the diamond itself, whose error is not yet set).
+    const std::ptrdiff_t e = square ? d : d >> 1;
+    for (int i = 0; i < 4; ++i) {
+      const std::ptrdiff_t cx = square ? (i < 2 ? (i == 0 ? -e : e) : 0) : (i % 2 == 0 ? -e : e);
+      const std::ptrdiff_t cy = square ? (i < 2 ? 0 : (i == 2 ? -e : e)) : (i < 2 ? -e : e);
+      out[0].child[i] = cy * w + cx;
+    }
+    for (int k = 0; k < 2; ++k) {
+      const std::ptrdiff_t ax = cn.ax[k], ay = cn.ay[k];
+      TriList& t = out[k];
+      t.a = (ay - y) * w + (ax - x);
+      t.b = (cn.by - y) * w + (cn.bx - x);
+      t.c = (cn.cy - y) * w + (cn.cx - x);
+      t.samples.clear();
+      auto cross = [](std::ptrdiff_t ux, std::ptrdiff_t uy, std::ptrdiff_t vx, std::ptrdiff_t vy) { return ux * vy - uy * vx; };
+      const std::ptrdiff_t area2 = cross(cn.bx - ax, cn.by - ay, cn.cx - ax, cn.cy - ay);
+      for (std::ptrdiff_t sy = std::min({ay, cn.by, cn.cy}); sy <= std::max({ay, cn.by, cn.cy}); ++sy)
+        for (std::ptrdiff_t sx = std::min({ax, cn.bx, cn.cx}); sx <= std::max({ax, cn.bx, cn.cx}); ++sx) {
+          // Barycentric coordinates times area2: of b, of c, and the rest of a.
+          const std::ptrdiff_t nb = cross(sx - ax, sy - ay, cn.cx - ax, cn.cy - ay);
+          const std::ptrdiff_t nc = cross(cn.bx - ax, cn.by - ay, sx - ax, sy - ay);
+          const std::ptrdiff_t na = area2 - nb - nc;
+          const bool inside = area2 > 0 ? (na >= 0 && nb >= 0 && nc >= 0) : (na <= 0 && nb <= 0 && nc <= 0);
+          const bool corner = na == area2 || nb == area2 || nc == area2;
+          // Samples on the hypotenuse (na = 0) have the same plane value in both triangles: listed once.
+          // Samples on a leg (nb = 0 or nc = 0) are skipped: a leg is the hypotenuse of a child triangle
+          // whose plane agrees with this one along it, so the child's error, saturated below, covers them.
+          if (!inside || corner || (k == 1 && na == 0) || nb == 0 || nc == 0) continue;
+          t.samples.push_back({(sy - y) * w + (sx - x), double(na) / double(area2), double(nb) / double(area2),
+                               double(nc) / double(area2)});
+        }
+    }
+  };
+  auto saturate = [&](std::size_t p, double e) {
+    float sat = round_up(e);
+    for_each_child(static_cast<Index>(p), [&](Index c) { sat = std::max(sat, rec[c].error); });
+    rec[p].error = sat;
+  };
+  constexpr int kListLevels = 3;  // d = 1, 2, 4
+  TriList lists[2][2];
+  for_each_diamond_row(w, h, log2_tile_, [&](std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square, std::ptrdiff_t x_begin, std::ptrdiff_t x_end) {
+    std::ptrdiff_t x = x_begin;
+    if (ld < kListLevels && y >= d && y + d <= last_y) {
+      if (x < d) {  // x = 0: its left corner is outside the lattice
+        saturate(static_cast<std::size_t>(y * w + x), scan_own_error(x, y, d, square));
+        x += 2 * d;
+      }
+      if (x + d <= last_x) {
+        const std::ptrdiff_t x1 = x + ((last_x - d - x) / (2 * d)) * (2 * d);
+        // Squares alternate between two layouts along a row; edge diamonds keep one.
+        make_lists(x, y, d, ld, square, lists[0]);
+        make_lists(x + 2 * d, y, d, ld, square, lists[1]);
+        int parity = 0;
+        for (; x <= x1; x += 2 * d, parity ^= 1) {
+          const std::size_t p = static_cast<std::size_t>(y * w + x);
+          double e = 0.0;
+          const TriList(&l)[2] = lists[square ? parity : 0];
+          for (const TriList& t : l) {
+            const double za = rec[p + t.a].z, zb = rec[p + t.b].z, zc = rec[p + t.c].z;
+            for (const Sample& q : t.samples)
+              e = std::max(e, std::abs(double(rec[p + q.off].z) - (q.wa * za + q.wb * zb + q.wc * zc)));
+          }
+          // Saturation as in saturate(); an error of 0 at offset 0 (finest edge diamonds) changes nothing.
+          const std::ptrdiff_t* o = l[0].child;
+          const float ce = std::max(std::max(rec[p + o[0]].error, rec[p + o[1]].error),
+                                    std::max(rec[p + o[2]].error, rec[p + o[3]].error));
+          rec[p].error = std::max(round_up(e), ce);
+        }
+      }
+    }
+    for (; x < x_end; x += 2 * d) saturate(static_cast<std::size_t>(y * w + x), scan_own_error(x, y, d, square));
+  });
+  z_ = {};
 }
 
 void Grid48::compute_radii() {

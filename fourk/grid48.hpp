@@ -64,12 +64,13 @@ struct Grid48Options {
   /// Force a tile size (power of two cells, 0 = automatic).
   std::size_t tile_size = 0;
   /// Node errors. true (default): the exact largest vertical distance between each diamond's triangles
-  /// and the samples they cover, by branch and bound over sub-triangles whose exact signed residual ranges
-  /// are already known (finest first). false: a guaranteed but looser upper bound, O(1) per node from
-  /// those ranges (faster build, more triangles for the same error).
+  /// and the samples they cover (saturated: at least the children's), by scanning the samples at every
+  /// level (O(samples * levels); small diamonds through per-row sample lists). false: a guaranteed but
+  /// looser upper bound, O(1) per node from its children's signed residual ranges (faster build, more
+  /// triangles for the same error).
   bool exact_errors = true;
-  /// Compute the exact errors by scanning every sample at every level instead (O(samples * levels)): the
-  /// slow reference the branch and bound is tested against.
+  /// Compute the exact errors with the plain per-diamond row scan instead, and the radii one diamond at a
+  /// time: the reference the default build is tested against.
   bool reference_scan = false;
 };
 
@@ -160,6 +161,8 @@ class Grid48 {
 
  private:
   void compute_errors();
+  void compute_exact_errors();
+  double scan_own_error(std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) const;
   void compute_radii();
   void compute_bounds_fast(bool exact);
   void build_histogram();

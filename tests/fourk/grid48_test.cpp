@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <iterator>
 #include <map>
 #include <random>
 #include <set>
@@ -480,10 +482,11 @@ TEST(Grid48, UpdateViewMixedWithGenericEditsStaysExact) {
 namespace varmesh {
 namespace {
 
-// The branch-and-bound exact errors against the reference that scans every sample at every level, and the
-// fast bound against both (never below the exact value). The radii of the exact build come from the general
-// per-diamond code and those of the fast build mostly from its row kernel, so their equality also checks
-// the kernel (unequal spacings, padded and unpadded sizes).
+// The exact errors (per-row sample lists for small diamonds, row scans for large ones) against the
+// reference that scans every diamond's rows, and the fast bound against both (never below the exact
+// value). The reference build takes its radii from compute_radii() (lattice positions, one diamond at a
+// time), the others mostly from the row kernel, so their equality checks the kernel (unequal spacings,
+// padded and unpadded sizes).
 TEST(Grid48, ExactErrorsMatchTheReferenceScan) {
   for (auto [w, h, seed] : {std::tuple{65, 65, 31u}, std::tuple{100, 37, 32u}, std::tuple{131, 77, 33u}, std::tuple{2, 2, 34u},
                             std::tuple{129, 129, 35u}, std::tuple{200, 90, 36u}}) {
@@ -500,8 +503,82 @@ TEST(Grid48, ExactErrorsMatchTheReferenceScan) {
       if (!a.is_node(p)) continue;
       ASSERT_NEAR(a.error(p), b.error(p), 1e-5f * (1.0f + b.error(p))) << w << "x" << h << " node " << p;
       ASSERT_GE(c.error(p), b.error(p) * (1.0f - 1e-6f)) << "the fast bound is below the exact error at " << p;
-      ASSERT_FLOAT_EQ(a.radius(p), c.radius(p));
+      ASSERT_FLOAT_EQ(b.radius(p), a.radius(p));
+      ASSERT_FLOAT_EQ(b.radius(p), c.radius(p));
     }
+  }
+}
+
+// The exact errors against a brute force that shares nothing with Grid48's error code: the hierarchy as an
+// explicit Mt, each node's removed triangles, every grid sample inside them (barycentric coordinates in
+// long double), the largest vertical distance to the triangle's plane, saturated over the node's
+// descendants (the destroyers of its image). Each Mt node is matched to its lattice point through the
+// vertex it inserts. Padded sizes, unequal spacings, a forced tile size.
+TEST(Grid48, ExactErrorsMatchABruteForceOverTheMt) {
+  struct Case {
+    std::size_t w, h;
+    float sx, sy;
+    std::size_t tile;
+  };
+  for (const Case c : {Case{17, 17, 1.0f, 1.0f, 0}, Case{23, 12, 0.5f, 2.0f, 0}, Case{40, 33, 1.5f, 1.0f, 8}, Case{9, 30, 1.0f, 1.0f, 0}}) {
+    HeightField f = make_fractal_terrain(c.w, c.h, 77u + static_cast<std::uint32_t>(c.w), 60.0f);
+    f.spacing_x = c.sx;
+    f.spacing_y = c.sy;
+    Grid48Options o;
+    o.tile_size = c.tile;
+    const Grid48 g(f, o);
+    const Mt mt = g.to_mt();
+    using LD = long double;
+    auto own_error = [&](NodeId n) {
+      LD worst = 0;
+      for (FaceId t : mt.pre_image(n)) {
+        const auto v = mt.face(t);
+        // Corners: lattice coordinates from the lattice point ids, heights from the Mt's positions.
+        LD X[3], Y[3], Z[3];
+        for (int k = 0; k < 3; ++k) {
+          X[k] = LD(v[k] % g.lattice_width());
+          Y[k] = LD(v[k] / g.lattice_width());
+          Z[k] = LD(mt.position(v[k]).z);
+        }
+        const LD area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
+        for (std::size_t y = 0; y < c.h; ++y)
+          for (std::size_t x = 0; x < c.w; ++x) {
+            const LD l1 = ((LD(x) - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (LD(y) - Y[0])) / area;
+            const LD l2 = ((X[1] - X[0]) * (LD(y) - Y[0]) - (LD(x) - X[0]) * (Y[1] - Y[0])) / area;
+            const LD l0 = 1 - l1 - l2;
+            if (l0 < 0 || l1 < 0 || l2 < 0) continue;
+            const LD plane = l0 * Z[0] + l1 * Z[1] + l2 * Z[2];
+            worst = std::max(worst, std::fabs(LD(f.z[y * c.w + x]) - plane));
+          }
+      }
+      return worst;
+    };
+    std::vector<LD> sat(mt.num_nodes(), -1);
+    std::function<LD(NodeId)> saturated = [&](NodeId n) -> LD {
+      if (sat[n] >= 0) return sat[n];
+      LD e = own_error(n);
+      for (FaceId t = mt.image_begin(n); t < mt.image_end(n); ++t)
+        if (mt.destroyer(t) != kInvalid) e = std::max(e, saturated(mt.destroyer(t)));
+      return sat[n] = e;
+    };
+    std::size_t checked = 0;
+    for (NodeId n = 1; n < mt.num_nodes(); ++n) {
+      std::set<VertexId> before, after;
+      for (FaceId t : mt.pre_image(n))
+        for (VertexId v : mt.face(t)) before.insert(v);
+      for (FaceId t = mt.image_begin(n); t < mt.image_end(n); ++t)
+        for (VertexId v : mt.face(t)) after.insert(v);
+      std::vector<VertexId> inserted;
+      std::set_difference(after.begin(), after.end(), before.begin(), before.end(), std::back_inserter(inserted));
+      ASSERT_EQ(inserted.size(), 1u) << "node " << n;
+      const Index p = inserted[0];
+      const LD want = saturated(n);
+      // The stored value is a float rounded up from a double computation.
+      EXPECT_GE(LD(g.error(p)), want * (1 - 1e-12L)) << c.w << "x" << c.h << " point " << p;
+      EXPECT_LE(LD(g.error(p)), want * (1 + 1e-6L) + 1e-9L) << c.w << "x" << c.h << " point " << p;
+      ++checked;
+    }
+    EXPECT_EQ(checked, g.num_nodes());
   }
 }
 
