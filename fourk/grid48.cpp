@@ -6,6 +6,7 @@
 #include <cstring>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <unordered_map>
 
 #if defined(__SSE2__)
@@ -366,8 +367,12 @@ void Grid48::compute_bounds_fast(bool exact) {
     }
     return l;
   };
-  auto row = [&](std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
-    const bool finest = !square && ld == 0;  // children are finest triangles (range [0, 0]), no child diamonds
+  // Specialised on the kind of errors and on the finest level (children are finest triangles, range
+  // [0, 0], and there are no child diamonds), so that the loop carries no flags.
+  auto row_loop = [&](auto exact_c, auto finest_c, std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y, std::ptrdiff_t d,
+                      int ld, bool square) {
+    constexpr bool kExact = decltype(exact_c)::value;
+    constexpr bool kFinest = decltype(finest_c)::value;
     const Layout lay[2] = {layout(x0, y, d, ld, square), layout(x0 + 2 * d, y, d, ld, square)};
     const float ry = rowy[y];
     int parity = 0;
@@ -381,9 +386,9 @@ void Grid48::compute_bounds_fast(bool exact) {
       const float df = static_cast<float>(delta);
       const float dlo = df < 0.0f ? df : 0.0f, dhi = df > 0.0f ? df : 0.0f;
       float side_err[2] = {0.0f, 0.0f};
-      for (int k = 0; k < 2 && !exact; ++k) {
+      for (int k = 0; k < 2 && !kExact; ++k) {
         float lo0 = 0.0f, hi0 = 0.0f, lo1 = 0.0f, hi1 = 0.0f;
-        if (!finest) {
+        if constexpr (!kFinest) {
           lo0 = lo_of[2 * p + l.t0[k]], hi0 = hi_of[2 * p + l.t0[k]];
           lo1 = lo_of[2 * p + l.t1[k]], hi1 = hi_of[2 * p + l.t1[k]];
         }
@@ -404,7 +409,7 @@ void Grid48::compute_bounds_fast(bool exact) {
       float r = std::sqrt(std::max(std::max(sq(l.px[0], l.py[0], l.pl[0]), sq(l.px[1], l.py[1], l.pl[1])),
                                    std::max(sq(l.px[2], l.py[2], l.pl[2]), sq(l.px[3], l.py[3], l.pl[3]))));
       float err = std::max(side_err[0], side_err[1]);
-      if (!finest) {
+      if constexpr (!kFinest) {
         float ce[4], cr[4];
         for (int i = 0; i < 4; ++i) {
           ce[i] = rec[p + l.ql[i]].error;
@@ -421,8 +426,20 @@ void Grid48::compute_bounds_fast(bool exact) {
         err = std::max(err, std::max(std::max(ce[0], ce[1]), std::max(ce[2], ce[3])));
         r = std::max(r, std::max(std::max(cr[0], cr[1]), std::max(cr[2], cr[3])));
       }
-      if (!exact) rec[p].error = err;
+      if constexpr (!kExact) rec[p].error = err;
       rad_of[p] = r * (1.0f + 1e-6f);
+    }
+  };
+  auto row = [&](std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
+    using T = std::true_type;
+    using F = std::false_type;
+    const bool finest = !square && ld == 0;
+    if (exact) {
+      if (finest) row_loop(T{}, T{}, x0, x1, y, d, ld, square);
+      else row_loop(T{}, F{}, x0, x1, y, d, ld, square);
+    } else {
+      if (finest) row_loop(F{}, T{}, x0, x1, y, d, ld, square);
+      else row_loop(F{}, F{}, x0, x1, y, d, ld, square);
     }
   };
   for (int ld = 0; ld < log2_tile_; ++ld) {
