@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstring>
 #include <string>
-#include <thread>
 #include <type_traits>
 #include <unordered_map>
 
@@ -32,42 +31,6 @@ struct PlaneXY {
     base = az - gx * ax - gy * ay;
   }
 };
-
-// Runs body(y_begin, y_end) over the rows 0, d, 2d, ... < h, split in two halves on two threads when the
-// level is large enough to pay for a thread. Diamonds of one level only read finer levels and write their
-// own entries, so the halves never race.
-template <class Body>
-void for_rows(std::ptrdiff_t h, std::ptrdiff_t w, std::ptrdiff_t d, Body&& body) {
-  const std::ptrdiff_t rows = (h + d - 1) / d;
-  if (rows < 8 || (rows * (w / d + 1)) < 65536) {
-    body(std::ptrdiff_t(0), h);
-    return;
-  }
-  const std::ptrdiff_t mid = (rows / 2) * d;
-  std::thread other([&] { body(mid, h); });
-  body(std::ptrdiff_t(0), mid);
-  other.join();
-}
-
-// Visits every diamond, finest level first (edge diamonds of size d, then squares of size d, for
-// d = 1, 2, 4, ...): fn(x, y, d, square). Within one level the rows are split over two threads; a diamond
-// reads only finer levels and writes only its own entries, so the halves never race.
-template <class Fn>
-void for_each_diamond_finest_first(std::ptrdiff_t w, std::ptrdiff_t h, int log2_tile, Fn&& fn) {
-  for (int ld = 0; ld < log2_tile; ++ld) {
-    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
-    for (int pass = 0; pass < 2; ++pass) {
-      for_rows(h, w, d, [&](std::ptrdiff_t y_begin, std::ptrdiff_t y_end) {
-        for (std::ptrdiff_t y = y_begin; y < y_end; y += d) {
-          const bool yodd = ((y / d) & 1) != 0;
-          if (pass == 1 && !yodd) continue;
-          // Edge diamonds: x an odd multiple of d on even rows, an even one on odd rows; squares: both odd.
-          for (std::ptrdiff_t x = (pass == 1 || !yodd) ? d : 0; x < w; x += 2 * d) fn(x, y, d, pass == 1);
-        }
-      });
-    }
-  }
-}
 
 float round_up(double v) {
   float f = static_cast<float>(v);
@@ -226,6 +189,14 @@ void for_each_diamond_row(std::ptrdiff_t w, std::ptrdiff_t h, int log2_tile, Fn&
       }
     }
   }
+}
+
+// Visits every diamond, finest level first: fn(x, y, d, square) (the order of for_each_diamond_row).
+template <class Fn>
+void for_each_diamond_finest_first(std::ptrdiff_t w, std::ptrdiff_t h, int log2_tile, Fn&& fn) {
+  for_each_diamond_row(w, h, log2_tile, [&](std::ptrdiff_t y, std::ptrdiff_t d, int, bool square, std::ptrdiff_t x_begin, std::ptrdiff_t x_end) {
+    for (std::ptrdiff_t x = x_begin; x < x_end; x += 2 * d) fn(x, y, d, square);
+  });
 }
 
 }  // namespace
