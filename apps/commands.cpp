@@ -229,7 +229,7 @@ int run(int argc, char** argv) {
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");
   terrain->add_option("--raw-size", ta.raw_size, "W,H of a .raw/.f32 file");
   terrain->add_flag("--terrain-rgb", ta.terrain_rgb, "decode a Mapbox Terrain-RGB PNG");
-  terrain->add_flag("--fast-bound", ta.fast_bound, "looser O(1)-per-node error bounds (faster build, more triangles)");
+  terrain->add_flag("--fast-bound", ta.fast_bound, "looser O(1)-per-node error bounds instead of exact errors (more triangles for the same threshold)");
   terrain->add_flag("--measure", ta.measure, "measure the true max vertical error of the result over all samples");
   terrain->add_option("--png", ta.png, "also render the result to this PNG");
 

@@ -66,8 +66,8 @@ struct Grid48Options {
   /// Node errors. true (default): the exact largest vertical distance between each diamond's triangles
   /// and the samples they cover (saturated: at least the children's), by scanning the samples at every
   /// level (O(samples * levels); small diamonds through per-row sample lists). false: a guaranteed but
-  /// looser upper bound, O(1) per node from its children's signed residual ranges (faster build, more
-  /// triangles for the same error).
+  /// looser upper bound, O(1) per node from its children's signed residual ranges (about as fast to build
+  /// since the exact scan got its row lists; more triangles for the same error).
   bool exact_errors = true;
   /// Compute the exact errors with the plain per-diamond row scan instead, and the radii one diamond at a
   /// time: the reference the default build is tested against.
