@@ -191,6 +191,26 @@ void for_each_diamond_row(std::ptrdiff_t w, std::ptrdiff_t h, int log2_tile, Fn&
   }
 }
 
+// Splits a row of diamonds (as for_each_diamond_row gives it) into the run whose corners are all grid
+// samples, interior(x0, x1) for the diamonds at x0, x0 + 2d, ..., x1, and the others, border(x) each.
+template <class Interior, class Border>
+void split_row(std::ptrdiff_t y, std::ptrdiff_t d, std::ptrdiff_t x_begin, std::ptrdiff_t x_end, std::ptrdiff_t last_x,
+               std::ptrdiff_t last_y, Interior&& interior, Border&& border) {
+  std::ptrdiff_t x = x_begin;
+  if (y >= d && y + d <= last_y) {
+    if (x < d) {  // x = 0: its left corner is outside the lattice
+      border(x);
+      x += 2 * d;
+    }
+    if (x + d <= last_x) {  // x - d >= 0 here; the run ends at the last x + d <= last_x
+      const std::ptrdiff_t x1 = x + ((last_x - d - x) / (2 * d)) * (2 * d);
+      interior(x, x1);
+      x = x1 + 2 * d;
+    }
+  }
+  for (; x < x_end; x += 2 * d) border(x);
+}
+
 // Visits every diamond, finest level first: fn(x, y, d, square) (the order of for_each_diamond_row).
 template <class Fn>
 void for_each_diamond_finest_first(std::ptrdiff_t w, std::ptrdiff_t h, int log2_tile, Fn&& fn) {
@@ -413,29 +433,11 @@ void Grid48::compute_bounds_fast(bool exact) {
       else row_loop(F{}, F{}, x0, x1, y, d, ld, square);
     }
   };
-  for (int ld = 0; ld < log2_tile_; ++ld) {
-    const std::ptrdiff_t d = std::ptrdiff_t(1) << ld;
-    for (int pass = 0; pass < 2; ++pass) {
-      const bool square = pass == 1;
-      for (std::ptrdiff_t y = 0; y < h; y += d) {
-        const bool yodd = ((y >> ld) & 1) != 0;
-        if (square && !yodd) continue;
-        std::ptrdiff_t x = (square || !yodd) ? d : 0;
-        if (y >= d && y + d <= last_y) {
-          if (x < d) {
-            visit(x, y, d, square);
-            x += 2 * d;
-          }
-          if (x + d <= last_x) {  // x - d >= 0 here; the row's interior part ends at the last x + d <= last_x
-            const std::ptrdiff_t x1 = x + ((last_x - d - x) / (2 * d)) * (2 * d);
-            row(x, x1, y, d, ld, square);
-            x = x1 + 2 * d;
-          }
-        }
-        for (; x < w; x += 2 * d) visit(x, y, d, square);
-      }
-    }
-  }
+  for_each_diamond_row(w, h, log2_tile_, [&](std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square, std::ptrdiff_t x_begin, std::ptrdiff_t x_end) {
+    split_row(
+        y, d, x_begin, x_end, last_x, last_y, [&](std::ptrdiff_t x0, std::ptrdiff_t x1) { row(x0, x1, y, d, ld, square); },
+        [&](std::ptrdiff_t x) { visit(x, y, d, square); });
+  });
 }
 
 std::size_t Grid48::num_nodes() const noexcept { return lw_ * lh_ - (tx_ + 1) * (ty_ + 1); }
@@ -624,37 +626,38 @@ void Grid48::compute_exact_errors() {
   };
   constexpr int kListLevels = 3;  // d = 1, 2, 4
   TriList lists[2][2];
-  for_each_diamond_row(w, h, log2_tile_, [&](std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square, std::ptrdiff_t x_begin, std::ptrdiff_t x_end) {
-    std::ptrdiff_t x = x_begin;
-    if (ld < kListLevels && y >= d && y + d <= last_y) {
-      if (x < d) {  // x = 0: its left corner is outside the lattice
-        saturate(static_cast<std::size_t>(y * w + x), scan_own_error(x, y, d, square));
-        x += 2 * d;
+  auto scan = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
+    saturate(static_cast<std::size_t>(y * w + x), scan_own_error(x, y, d, square));
+  };
+  auto listed = [&](std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square) {
+    // Squares alternate between two layouts along a row; edge diamonds keep one.
+    make_lists(x0, y, d, ld, square, lists[0]);
+    make_lists(x0 + 2 * d, y, d, ld, square, lists[1]);
+    int parity = 0;
+    for (std::ptrdiff_t x = x0; x <= x1; x += 2 * d, parity ^= 1) {
+      const std::size_t p = static_cast<std::size_t>(y * w + x);
+      double e = 0.0;
+      const TriList(&l)[2] = lists[square ? parity : 0];
+      for (const TriList& t : l) {
+        const double za = rec[p + t.a].z, zb = rec[p + t.b].z, zc = rec[p + t.c].z;
+        for (const Sample& q : t.samples)
+          e = std::max(e, std::abs(double(rec[p + q.off].z) - (q.wa * za + q.wb * zb + q.wc * zc)));
       }
-      if (x + d <= last_x) {
-        const std::ptrdiff_t x1 = x + ((last_x - d - x) / (2 * d)) * (2 * d);
-        // Squares alternate between two layouts along a row; edge diamonds keep one.
-        make_lists(x, y, d, ld, square, lists[0]);
-        make_lists(x + 2 * d, y, d, ld, square, lists[1]);
-        int parity = 0;
-        for (; x <= x1; x += 2 * d, parity ^= 1) {
-          const std::size_t p = static_cast<std::size_t>(y * w + x);
-          double e = 0.0;
-          const TriList(&l)[2] = lists[square ? parity : 0];
-          for (const TriList& t : l) {
-            const double za = rec[p + t.a].z, zb = rec[p + t.b].z, zc = rec[p + t.c].z;
-            for (const Sample& q : t.samples)
-              e = std::max(e, std::abs(double(rec[p + q.off].z) - (q.wa * za + q.wb * zb + q.wc * zc)));
-          }
-          // Saturation as in saturate(); an error of 0 at offset 0 (finest edge diamonds) changes nothing.
-          const std::ptrdiff_t* o = l[0].child;
-          const float ce = std::max(std::max(rec[p + o[0]].error, rec[p + o[1]].error),
-                                    std::max(rec[p + o[2]].error, rec[p + o[3]].error));
-          rec[p].error = std::max(round_up(e), ce);
-        }
-      }
+      // Saturation as in saturate(); an error of 0 at offset 0 (finest edge diamonds) changes nothing.
+      const std::ptrdiff_t* o = l[0].child;
+      const float ce = std::max(std::max(rec[p + o[0]].error, rec[p + o[1]].error),
+                                std::max(rec[p + o[2]].error, rec[p + o[3]].error));
+      rec[p].error = std::max(round_up(e), ce);
     }
-    for (; x < x_end; x += 2 * d) saturate(static_cast<std::size_t>(y * w + x), scan_own_error(x, y, d, square));
+  };
+  for_each_diamond_row(w, h, log2_tile_, [&](std::ptrdiff_t y, std::ptrdiff_t d, int ld, bool square, std::ptrdiff_t x_begin, std::ptrdiff_t x_end) {
+    if (ld >= kListLevels) {
+      for (std::ptrdiff_t x = x_begin; x < x_end; x += 2 * d) scan(x, y, d, square);
+      return;
+    }
+    split_row(
+        y, d, x_begin, x_end, last_x, last_y, [&](std::ptrdiff_t x0, std::ptrdiff_t x1) { listed(x0, x1, y, d, ld, square); },
+        [&](std::ptrdiff_t x) { scan(x, y, d, square); });
   });
   z_ = {};
 }
