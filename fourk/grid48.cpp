@@ -221,7 +221,8 @@ void for_each_diamond_finest_first(std::ptrdiff_t w, std::ptrdiff_t h, int log2_
 
 }  // namespace
 
-// Bottom-up error bounds (signed residual ranges) and nested radii in one finest-first pass.
+// Nested radii, finest first, and the node errors: exact ones from compute_exact_errors(), or the fast
+// bound below, from signed residual ranges in the same pass as the radii.
 //
 // For a triangle T split at the midpoint m of its hypotenuse (b, c) into children c0, c1: over a child,
 // plane_child - plane_T is linear, 0 at the child's two corners shared with T and
@@ -301,8 +302,6 @@ void Grid48::compute_bounds_fast(bool exact) {
           hi += std::abs(hi) * 1e-6f + 1e-30f;
           err = std::max({err, hi, -lo});
         }
-      }
-      if (!exact) {
         rmin[2 * p + static_cast<std::size_t>(side)] = lo;
         rmax[2 * p + static_cast<std::size_t>(side)] = hi;
       }
