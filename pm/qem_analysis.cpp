@@ -17,6 +17,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -24,6 +25,7 @@
 
 #include "multitri/errors.hpp"
 #include "pm/qem_heap.hpp"
+#include "pm/read_ahead.hpp"
 #include "pm/quadric.hpp"
 
 namespace varmesh {
@@ -143,9 +145,14 @@ class Analysis {
   struct Run {
     Index off = 0, cnt = 0;
   };
+  // The placement is kept from the costing when it came from the linear solve: that depends only on the
+  // summed quadric, not on the order of the ends, so it is what placing the popped edge would give. The
+  // fallbacks (a point of the segment from the first end), Lindstrom-Turk placements (centred on the first
+  // end) and colours are placed again at the pop, from the lower node as always: p.x is NaN for those.
   struct Edge {
     Index a, b;  // slots, node_of_[a] < node_of_[b]
     double cost;
+    glm::dvec3 p;
   };
   // An edge as seen from one end: the other end is kept with the slot so that walking a node's edges
   // touches only its own run.
@@ -156,7 +163,11 @@ class Analysis {
     glm::dvec3 p;
     glm::dvec3 color{0.0};
     double cost;
+    bool solved = false;  // p from Quadric's linear solve (no colours)
   };
+  static glm::dvec3 kept(const Placement& pl) {
+    return pl.solved ? pl.p : glm::dvec3(std::numeric_limits<double>::quiet_NaN());
+  }
   enum class Verdict { kOk, kLink, kFlip, kDepth, kLocked };
 
   // Geometry in normalised coordinates.
@@ -188,6 +199,38 @@ class Analysis {
   Placement place_lt(Index a, Index b) const;
   void set_edge(Index e, Index a, Index b);
   void reinsert_edges_of(Index v);
+  // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
+  // rather than __builtin_prefetch. On the machine measured (a VM) the prefetches gained little; the same
+  // reads as loads overlap.
+  template <class T> static void touch(const T& x) noexcept { detail::touch(x); }
+  void touch_ends(Index a, Index b) const {
+    for (Index v : {a, b}) {
+      touch(geo_[v].p.x);
+      touch(geo_[v].q.b0);
+      touch(fadj_[v].off);
+      touch(eadj_[v].off);
+    }
+  }
+  void touch_runs(Index a, Index b) const {
+    for (Index v : {a, b}) {
+      if (fadj_[v].cnt > 0) touch(*faces_begin(v));
+      if (eadj_[v].cnt > 0) touch(edges_begin(v)->edge);
+    }
+  }
+  void touch_faces(Index a, Index b) const {
+    for (Index v : {a, b}) {
+      touch(raw_.bounds[node_of_[v]].radius);
+      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+        touch(cur_[3 * *it]);
+        touch(fnormal_[*it].x);
+        if (v == a) touch(in_.faces[3 * *it]);  // fl and fr are among these
+      }
+      for (const EdgeRef* e = edges_begin(v); e != edges_end(v); ++e) {
+        touch(geo_[e->to].p.x);
+        touch(mark_[e->to]);
+      }
+    }
+  }
   // What check() finds on its way for the collapse that follows: the edge's faces and apexes, Hoppe's
   // fn0..fn3, the node error increment, and (in new_normal_) the new normals of the faces that stay.
   struct Step {
@@ -247,22 +290,17 @@ class Analysis {
   std::vector<double> uerr_;  // per node, unit coordinates (per slot too)
 };
 
+// Each branch returns its own prvalue: built in place in the caller's object, with no copy through a local
+// (that copy reloaded the fields with wider loads than the stores that wrote them, a stall per edge placed).
 Analysis::Placement Analysis::place(Index a, Index b) const {
   if (lt_) return place_lt(a, b);
-  Placement out{};
   if (colors_) {
     const AttributeQuadric q = aq_[a] + aq_[b];
     const AttributeOptimum o = q.optimal_on_segment({geo_[a].p, ucol_[a]}, {geo_[b].p, ucol_[b]});
-    out.p = o.point.position;
-    out.color = o.point.color;
-    out.cost = o.error;
-  } else {
-    const Quadric q = geo_[a].q + geo_[b].q;
-    const QuadricOptimum o = q.optimal_on_segment(geo_[a].p, geo_[b].p);
-    out.p = o.point;
-    out.cost = o.error;
+    return Placement{o.point.position, o.point.color, o.error, false};
   }
-  return out;
+  const QuadricOptimum o = (geo_[a].q + geo_[b].q).optimal_on_segment(geo_[a].p, geo_[b].p);
+  return Placement{o.point, glm::dvec3(0.0), o.error, o.solved};
 }
 
 // LT98 on the current mesh: T = the faces around a or b (fl and fr included), B = their border edges with an
@@ -358,8 +396,8 @@ Analysis::Placement Analysis::place_lt(Index a, Index b) const {
 
 // Slot e becomes candidate (a, b), with its cost, in the heap; the caller fixes the nodes' runs.
 void Analysis::set_edge(Index e, Index a, Index b) {
-  const double cost = place(a, b).cost;
-  edges_[e] = node_of_[a] < node_of_[b] ? Edge{a, b, cost} : Edge{b, a, cost};
+  const Placement pl = place(a, b);
+  edges_[e] = node_of_[a] < node_of_[b] ? Edge{a, b, pl.cost, kept(pl)} : Edge{b, a, pl.cost, kept(pl)};
   heap_.update(e, edges_[e].cost, tie_key(edges_[e]));
 }
 
@@ -538,16 +576,27 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   // slot and heap entry (a key update is cheaper than an erase plus a push); when w was a neighbour of both
   // (the apexes vl, vr) its second edge dies. The edge (a, b) itself has left the heap already.
   new_edges_.clear();
-  // The loop below is bound by cache misses on the neighbours' runs: request them all up front so that
-  // they overlap instead of arriving one after another.
+  // The loop below is bound by cache misses on the neighbours' runs and quadrics and on the edges' heap
+  // entries: read them all up front (touch(), not prefetches) so that they overlap instead of arriving one
+  // after another.
   for (Index v : {a, b})
     for (Index i = eadj_[v].off, end = i + eadj_[v].cnt; i < end; ++i) {
-      __builtin_prefetch(&eadj_[epool_[i].to]);
-      heap_.prefetch(epool_[i].edge);
+      const Index e = epool_[i].edge, w = epool_[i].to;
+      touch(eadj_[w].off);
+      touch(geo_[w].p.x);
+      touch(geo_[w].q.b0);
+      touch(edges_[e].a);
+      touch(heap_.position(e));
     }
   for (Index v : {a, b})
-    for (Index i = eadj_[v].off, end = i + eadj_[v].cnt; i < end; ++i)
-      __builtin_prefetch(epool_.data() + eadj_[epool_[i].to].off);
+    for (Index i = eadj_[v].off, end = i + eadj_[v].cnt; i < end; ++i) {
+      const Run& r = eadj_[epool_[i].to];
+      if (r.cnt > 0) touch(epool_[r.off].edge);
+      if (const Index at = heap_.position(epool_[i].edge); at != kInvalid) {
+        touch(heap_.key_at(at));
+        touch(heap_.parent_key_at(at));
+      }
+    }
   for (Index v : {a, b})
     for (Index i = eadj_[v].off, end = i + eadj_[v].cnt; i < end; ++i) {
       const Index e = epool_[i].edge, w = epool_[i].to;
@@ -569,10 +618,25 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   // Lindstrom-Turk costs are memoryless: they read the faces around both ends, and those of every neighbour
   // of vs just changed, so every edge at a neighbour is re-costed (and comes back if it had been rejected).
   // mark_ still holds the ring's stamp: an edge between two neighbours is re-costed from its lower slot.
-  if (lt_)
+  // Those costs read the faces around the second ring, scattered in memory: read the second ring's runs,
+  // then its faces' planes and corners, up front (as above) before the placements wait on them one by one.
+  if (lt_) {
+    for (Index w : ring_)
+      for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e) {
+        touch(fadj_[e->to].off);
+        touch(geo_[e->to].p.x);
+        touch(edges_[e->edge].a);
+      }
+    for (Index w : ring_)
+      for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
+        for (const Index* it = faces_begin(e->to); it != faces_end(e->to); ++it) {
+          touch(fplane_[*it].x);
+          touch(cur_[3 * *it]);
+        }
     for (Index w : ring_)
       for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
         if (e->to != vs && (mark_[e->to] != stamp_ || w < e->to)) set_edge(e->edge, w, e->to);
+  }
 
   ElementBound bound;
   Sphere s = enclose(Sphere{raw_.bounds[na].center, raw_.bounds[na].radius}, Sphere{raw_.bounds[nb].center, raw_.bounds[nb].radius});
@@ -652,7 +716,8 @@ void Analysis::init_edges() {
         if (w > v && mark_[w] != stamp_) {
           mark_[w] = stamp_;
           const Index id = static_cast<Index>(edges_.size());
-          edges_.push_back({static_cast<Index>(v), w, place(static_cast<Index>(v), w).cost});
+          const Placement pl = place(static_cast<Index>(v), w);
+          edges_.push_back({static_cast<Index>(v), w, pl.cost, kept(pl)});
           epool_[eadj_[v].off + eadj_[v].cnt++] = {id, w};
           epool_[eadj_[w].off + eadj_[w].cnt++] = {id, static_cast<Index>(v)};
         }
@@ -802,9 +867,19 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     }
     const Index e = heap_.top();
     heap_.pop();
+    // Look-ahead: the new top is nearly always the next edge popped (a collapse's new edges seldom cost
+    // less: 99 % of the pops on the dragon), and its data is a chain of cache misses (edge, ends, runs, then
+    // faces and neighbours). Start the chain now, follow it one link after check() and one more after the
+    // collapse, so that the misses overlap with this step's work; the step then reads the rest of its own
+    // chain (touch_faces) all at once before check() needs it.
+    const Index next = heap_.empty() ? kInvalid : heap_.top();
+    if (next != kInvalid) touch(edges_[next].a);
     const Index a = edges_[e].a, b = edges_[e].b;
-    const Placement pl = place(a, b);
+    touch_faces(a, b);
+    const Edge& pe = edges_[e];
+    const Placement pl = std::isnan(pe.p.x) ? place(a, b) : Placement{pe.p, glm::dvec3(0.0), pe.cost, true};
     const Verdict verdict = check(a, b, pl.p, step);
+    if (next != kInvalid) touch_ends(edges_[next].a, edges_[next].b);
     if (verdict == Verdict::kOk) {
       // Stop before the first collapse whose recorded error would exceed the limit.
       if (std::isfinite(opt_.max_error) && (std::max(uerr_[a], uerr_[b]) + step.local) * scale_ > opt_.max_error) break;
@@ -822,6 +897,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
       }
       if (verdict != Verdict::kLocked && verdict != Verdict::kDepth) rejected_[a] = rejected_[b] = 1;
     }
+    if (next != kInvalid) touch_runs(edges_[next].a, edges_[next].b);
   }
 
   raw_.faces = in_.faces;

@@ -39,8 +39,12 @@ class EdgeHeap {
   bool empty() const noexcept { return size_ == 0; }
   std::size_t size() const noexcept { return size_; }
   bool contains(Index id) const noexcept { return pos_[id] != kInvalid; }
-  /// Cache hint before erase(id) or contains(id).
-  void prefetch(Index id) const noexcept { __builtin_prefetch(pos_.data() + id); }
+  /// Where `id` sits (kInvalid when absent); a caller may read it early to bring the line in.
+  Index position(Index id) const noexcept { return pos_[id]; }
+  /// The rounded keys at position i and at its parent, the entries an update() at i compares first: a
+  /// caller may read them early to bring their lines in.
+  float key_at(std::size_t i) const noexcept { return h_[i].key; }
+  float parent_key_at(std::size_t i) const noexcept { return h_[i > 0 ? (i - 1) / kArity : 0].key; }
   Index top() const noexcept { return h_[0].id; }
   double top_cost() const noexcept { return cost_[h_[0].id]; }
 
