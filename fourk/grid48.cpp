@@ -172,7 +172,7 @@ Corners diamond_corners(std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, in
   return k;
 }
 
-// Calls fn(x, y, d, ld, square, x_begin, x_end) for every row of diamonds, finest level first (edge
+// Calls fn(y, d, ld, square, x_begin, x_end) for every row of diamonds, finest level first (edge
 // diamonds of size d, then squares of size d, for d = 1, 2, 4, ...): the row's diamonds are at
 // x_begin, x_begin + 2d, ... < x_end. A diamond reads only finer levels (and, for squares, the edge
 // diamonds of its own size), so the rows of one pass may run in any order.
@@ -491,12 +491,11 @@ double Grid48::scan_own_error(std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t
   auto zat = [&](std::ptrdiff_t px, std::ptrdiff_t py) { return double(z_[static_cast<std::size_t>(py * w + px)]); };
   double e = 0.0;
   if (square) {
-    // Diagonal from (cx, cy) (odd multiples of 2d) to the opposite corner; the off-diagonal corners are
-    // the apexes of the two halves, one on the left column (x - d), one on the right (x + d).
-    const int ld = grid48_detail::ctz(static_cast<std::size_t>(d));
-    const std::ptrdiff_t cx = (((x - d) >> (ld + 1)) & 1) != 0 ? x - d : x + d;
-    const std::ptrdiff_t cy = (((y - d) >> (ld + 1)) & 1) != 0 ? y - d : y + d;
-    const std::ptrdiff_t ox = 2 * x - cx, oy = 2 * y - cy;
+    // Diagonal from (cx, cy) to the opposite corner (ox, oy) (the hypotenuse of diamond_corners); the
+    // off-diagonal corners are the apexes of the two halves, one on the left column (x - d), one on the
+    // right (x + d).
+    const Corners cn = diamond_corners(x, y, d, grid48_detail::ctz(static_cast<std::size_t>(d)), true);
+    const std::ptrdiff_t cx = cn.bx, cy = cn.by, ox = cn.cx, oy = cn.cy;
     // Off corners: (ox, cy) and (cx, oy).
     const bool first_left = ox == x - d;
     const std::ptrdiff_t lx = first_left ? ox : cx, ly = first_left ? cy : oy;
