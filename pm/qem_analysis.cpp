@@ -765,15 +765,12 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     for (std::size_t v = 0; v < nl_; ++v) ucol_[v] = glm::dvec3(in_.colors[v]) * opt_.color_weight;
   }
   init_faces();
-  // Directed edge x -> y exists when a face of x holds it: scan x's faces (cache-friendly, O(degree)).
-  auto has_edge = [&](Index x, Index y) {
-    for (const Index* it = faces_begin(x); it != faces_end(x); ++it) {
-      const Index f = *it;
-      const int k = cur_[3 * f] == x ? 0 : (cur_[3 * f + 1] == x ? 1 : 2);
-      if (cur_[3 * f + (k + 1) % 3] == y) return true;
-    }
-    return false;
-  };
+  // Quadrics: area-weighted face planes plus border constraints (GH97). The sums are those of one loop over
+  // the faces adding each face's plane and then its border edges' planes (in corner order) to their
+  // corners, to the bit: the planes go to the corners in face order first, and a border vertex then sums its
+  // own again, in that loop's order, with its border planes. The edge v -> next of a face of v is a border
+  // edge when no face of v holds next -> v (next before v); prev -> v when none holds v -> prev. v's faces
+  // answer both, so the test reads v's run only.
   for (std::size_t f = 0; f < nf_; ++f) {
     const Index c0 = cur_[3 * f], c1 = cur_[3 * f + 1], c2 = cur_[3 * f + 2];
     if (colors_) {
@@ -787,27 +784,61 @@ VertexHierarchy Analysis::run(QemStats& stats) {
       geo_[c1].q += q;
       geo_[c2].q += q;
     }
-    for (int k = 0; k < 3; ++k) {
-      const Index x = cur_[3 * f + k], y = cur_[3 * f + (k + 1) % 3], z = cur_[3 * f + (k + 2) % 3];
-      if (has_edge(y, x)) continue;
-      border_[x] = border_[y] = 1;
-      const Quadric bq = Quadric::from_border_edge(geo_[x].p, geo_[y].p, geo_[z].p, opt_.border_penalty);
+  }
+  auto border_quadric = [&](Index x, Index y, Index z) {
+    return Quadric::from_border_edge(geo_[x].p, geo_[y].p, geo_[z].p, opt_.border_penalty);
+  };
+  std::vector<Index> after, before;  // per face of v: the corners after and before v
+  for (Index v = 0; v < nl_; ++v) {
+    after.clear();
+    before.clear();
+    for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+      const Index* c = &cur_[3 * *it];
+      const int j = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+      after.push_back(c[(j + 1) % 3]);
+      before.push_back(c[(j + 2) % 3]);
+    }
+    bool border = false;
+    for (std::size_t i = 0; i < after.size() && !border; ++i)
+      border = std::find(before.begin(), before.end(), after[i]) == before.end();
+    if (!border) continue;  // an open fan has an edge leaving v with no twin
+    border_[v] = 1;
+    Quadric q;
+    AttributeQuadric aq;
+    for (std::size_t i = 0; i < after.size(); ++i) {
+      const Index* c = &cur_[3 * faces_begin(v)[i]];
       if (colors_) {
-        // Border planes constrain position only: embed the 3x3 part in the 6x6 quadric.
-        AttributeQuadric aq;
-        const double m[3][3] = {{bq.a00, bq.a01, bq.a02}, {bq.a01, bq.a11, bq.a12}, {bq.a02, bq.a12, bq.a22}};
-        std::size_t idx = 0;
-        for (int i = 0; i < 6; ++i)
-          for (int j = i; j < 6; ++j, ++idx) aq.a[idx] = (i < 3 && j < 3) ? m[i][j] : 0.0;
-        aq.b = {bq.b0, bq.b1, bq.b2, 0, 0, 0};
-        aq.c = bq.c;
-        aq_[x] += aq;
-        aq_[y] += aq;
+        aq += AttributeQuadric::from_triangle({geo_[c[0]].p, ucol_[c[0]]}, {geo_[c[1]].p, ucol_[c[1]]},
+                                              {geo_[c[2]].p, ucol_[c[2]]});
       } else {
-        geo_[x].q += bq;
-        geo_[y].q += bq;
+        q += Quadric::from_triangle(geo_[c[0]].p, geo_[c[1]].p, geo_[c[2]].p);
+      }
+      const Index next = after[i], prev = before[i];
+      const bool out = std::find(before.begin(), before.end(), next) == before.end();  // v -> next
+      const bool in = std::find(after.begin(), after.end(), prev) == after.end();     // prev -> v
+      // Corner order: v -> next is edge j of the face, prev -> v edge j + 2 (mod 3), so v -> next comes
+      // first only when v is corner 0.
+      const bool out_first = c[0] == v;
+      for (int pass = 0; pass < 2; ++pass) {
+        const bool is_out = (pass == 0) == out_first;
+        if (is_out ? !out : !in) continue;
+        const Quadric bq = is_out ? border_quadric(v, next, prev) : border_quadric(prev, v, next);
+        if (colors_) {
+          // Border planes constrain position only: embed the 3x3 part in the 6x6 quadric.
+          AttributeQuadric e;
+          const double m[3][3] = {{bq.a00, bq.a01, bq.a02}, {bq.a01, bq.a11, bq.a12}, {bq.a02, bq.a12, bq.a22}};
+          std::size_t idx = 0;
+          for (int r = 0; r < 6; ++r)
+            for (int k = r; k < 6; ++k, ++idx) e.a[idx] = (r < 3 && k < 3) ? m[r][k] : 0.0;
+          e.b = {bq.b0, bq.b1, bq.b2, 0, 0, 0};
+          e.c = bq.c;
+          aq += e;
+        } else {
+          q += bq;
+        }
       }
     }
+    if (colors_) aq_[v] = aq; else geo_[v].q = q;
   }
 
   // Raw hierarchy: leaves first.
@@ -824,25 +855,55 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   raw_.ring_offsets.reserve(nl_ + 1);
   raw_.ring_items.reserve(8 * nl_);
   {
-    std::vector<float> radius(nl_, 0.0f);
-    std::vector<NormalCone> cone(nl_);
-    std::vector<std::uint8_t> has_cone(nl_, 0);
+    // Leaf bounds: the sphere around the vertex through its faces' corners (the largest squared distance,
+    // one root) and the cone of its faces' unit normals.
+    std::vector<glm::vec4> unit(nf_);  // per face: unit normal, w = 1 for a face of nonzero area
     for (std::size_t f = 0; f < nf_; ++f) {
       const glm::vec3 p0 = in_.positions[cur_[3 * f]], p1 = in_.positions[cur_[3 * f + 1]], p2 = in_.positions[cur_[3 * f + 2]];
       const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
       const float len = glm::length(n);
-      for (int k = 0; k < 3; ++k) {
-        const Index v = cur_[3 * f + k];
-        const glm::vec3 pv = in_.positions[v];
-        radius[v] = std::max({radius[v], glm::length(p0 - pv), glm::length(p1 - pv), glm::length(p2 - pv)});
-        if (len > 0.0f) {
-          const NormalCone c{n / len, 1.0f};
-          cone[v] = has_cone[v] ? enclose_normal(cone[v], c.axis) : c;
-          has_cone[v] = 1;
+      unit[f] = len > 0.0f ? glm::vec4(n / len, 1.0f) : glm::vec4(0.0f);
+    }
+    for (Index v = 0; v < nl_; ++v) {
+      const glm::vec3 pv = in_.positions[v];
+      float r2 = 0.0f;
+      glm::vec3 sum(0.0f);
+      float count = 0.0f;
+      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec3 d = in_.positions[cur_[3 * *it + k]] - pv;
+          r2 = std::max(r2, glm::dot(d, d));
+        }
+        sum += glm::vec3(unit[*it]);
+        count += unit[*it].w;
+      }
+      // The normal cone without trigonometry: the normals are points of the unit sphere, and a ball that
+      // holds them cuts off a cap that holds them. A ball grown from their centroid one normal at a time
+      // (Ritter) gives the axis; the farthest normal from the axis gives the exact half-angle. Full when
+      // that normal is 90 degrees or more away, or when there is no normal at all.
+      NormalCone cone;
+      if (count > 0.0f) {
+        glm::vec3 c = sum / count;
+        float r = 0.0f;
+        for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+          if (unit[*it].w == 0.0f) continue;
+          const glm::vec3 d = glm::vec3(unit[*it]) - c;
+          const float dd = glm::dot(d, d);
+          if (dd <= r * r) continue;
+          const float dl = std::sqrt(dd), grown = 0.5f * (r + dl);
+          c += d * ((grown - r) / dl);
+          r = grown;
+        }
+        if (const float cl = glm::length(c); cl > 0.0f) {
+          const glm::vec3 axis = c / cl;
+          float lo = 1.0f;
+          for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
+            if (unit[*it].w != 0.0f) lo = std::min(lo, glm::dot(axis, glm::vec3(unit[*it])));
+          if (lo > 2e-6f) cone = {axis, lo - 1e-6f};
         }
       }
+      raw_.bounds[v] = ElementBound{pv, std::sqrt(r2), 0.0f, cone};
     }
-    for (std::size_t v = 0; v < nl_; ++v) raw_.bounds[v] = ElementBound{in_.positions[v], radius[v], 0.0f, cone[v]};
   }
 
   init_edges();
@@ -907,7 +968,12 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   raw_.repair = in_.report;
   stats.base_vertices = alive_vertices_;
   stats.base_faces = alive_faces_;
-  VertexHierarchy h = VertexHierarchyBuilder::finish(std::move(raw_));
+#ifdef NDEBUG
+  constexpr bool kValidate = false;
+#else
+  constexpr bool kValidate = true;
+#endif
+  VertexHierarchy h = VertexHierarchyBuilder::finish(std::move(raw_), kValidate);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return h;
 }

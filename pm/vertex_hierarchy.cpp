@@ -32,7 +32,7 @@ std::size_t VertexHierarchy::memory_bytes() const noexcept {
          (ring_offsets_.size() + ring_items_.size()) * sizeof(Index) + keys_.size() * sizeof(NodeKey);
 }
 
-VertexHierarchy VertexHierarchyBuilder::finish(Raw raw) {
+VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
   VertexHierarchy h;
   const std::size_t nl = raw.num_leaves;
   const std::size_t nn = raw.positions.size();
@@ -149,9 +149,32 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw) {
   h.face_to_input_ = std::move(raw.face_to_input);
   h.locked_ = std::move(raw.locked);
   h.repair_ = raw.repair;
-  h.validate();
+  if (validate) h.validate();
   return h;
 }
+
+namespace {
+
+// Whether cone c lies inside cone p up to rounding, without trigonometry: with phi the angle between the
+// axes, c is inside when phi + t <= T + delta (t, T the half-angles), i.e. cos(phi + t) >= cos(T + delta),
+// each side expanded as cos x cos y - sin x sin y with the sines from the cosines (all angles in [0, pi]).
+// delta = 1e-3 radians: a float cosine near 1 resolves an angle only to about 5e-4 radians (acos has an
+// infinite slope at 1), and enclose() of multitri/bounds.cpp decides containment with float acos values.
+bool cone_inside(const NormalCone& c, const NormalCone& p) noexcept {
+  if (p.is_full()) return true;
+  if (c.is_full()) return false;
+  const double cos_phi = std::clamp(static_cast<double>(glm::dot(c.axis, p.axis)), -1.0, 1.0);
+  const double cos_t = std::clamp(static_cast<double>(c.cos_half_angle), -1.0, 1.0);
+  const double cos_p = std::clamp(static_cast<double>(p.cos_half_angle), -1.0, 1.0);
+  // phi + t > pi (cos t < cos(pi - phi) = -cos phi): c reaches past the antipode of p's axis, which no cone
+  // short of the full one holds.
+  if (cos_t + cos_phi < 0.0) return false;
+  auto sine = [](double cosine) { return std::sqrt(std::max(0.0, 1.0 - cosine * cosine)); };
+  constexpr double kCosDelta = 0.9999995000000417, kSinDelta = 0.0009999998333333417;  // delta = 1e-3
+  return cos_phi * cos_t - sine(cos_phi) * sine(cos_t) >= cos_p * kCosDelta - sine(cos_p) * kSinDelta;
+}
+
+}  // namespace
 
 void VertexHierarchy::validate() const {
   auto fail = [](const std::string& what) { throw std::logic_error("VertexHierarchy::validate: " + what); };
@@ -194,6 +217,7 @@ void VertexHierarchy::validate() const {
       const float slack = 1e-4f * (pb.radius + glm::length(pb.center)) + 1e-6f;
       if (glm::length(cb.center - pb.center) + cb.radius > pb.radius + slack)
         fail(name() + ": sphere of child " + std::to_string(c) + " is not inside");
+      if (!cone_inside(cb.cone, pb.cone)) fail(name() + ": normal cone of child " + std::to_string(c) + " is not inside");
     }
     // fl^ = (vt-part, vu-part, vl^): one corner under vt, one under vu, the third is vl^.
     auto check_face = [&](Index f, Index cut) {

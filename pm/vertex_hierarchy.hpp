@@ -18,8 +18,8 @@
 ///
 /// Invariants (validate()): parent/children consistent, children created before parents, keys consistent
 /// with the tree shape, bounds nested (child sphere inside parent sphere up to rounding, child error <=
-/// parent error, child cone inside parent cone), faces' corners are leaves, fl^/fr^ contain vl^/vr^ and one
-/// descendant of each child.
+/// parent error, child cone inside parent cone up to 1e-3 radians), faces' corners are leaves, fl^/fr^
+/// contain vl^/vr^ and one descendant of each child.
 #include <array>
 #include <bit>
 #include <cstddef>
@@ -161,7 +161,7 @@ class VertexHierarchy {
 };
 
 /// Assembles a VertexHierarchy from its raw arrays and derives the rest (parents, face creators, roots,
-/// base faces, keys). Used by the analysis and by the file reader; finish() validates.
+/// base faces, keys). Used by the analysis and by the file reader.
 class VertexHierarchyBuilder {
  public:
   struct Raw {
@@ -178,8 +178,11 @@ class VertexHierarchyBuilder {
   };
   /// Throws InvalidInput naming the element when the arrays do not describe a hierarchy (wrong sizes,
   /// indices out of range, a node with two parents, children after parents, a tree deeper than 62 levels
-  /// together with the tree ids in 64 bits, fl^/fr^ inconsistent with the tree).
-  static VertexHierarchy finish(Raw raw);
+  /// together with the tree ids in 64 bits, fl^/fr^ inconsistent with the tree). With `validate`, then
+  /// checks the result with VertexHierarchy::validate() (std::logic_error): the file reader does; the
+  /// analysis, whose records hold these invariants by construction, does so in debug builds only (its tests
+  /// validate every hierarchy they build).
+  static VertexHierarchy finish(Raw raw, bool validate = true);
 };
 
 }  // namespace varmesh

@@ -252,6 +252,54 @@ TEST(QemAnalysis, LindstromTurkSphereBoundsHold) {
   EXPECT_LT(worst, 0.02f);
 }
 
+// Angle from n to the cone's axis minus its half-angle (radians; <= 0 when the cone holds n), in double.
+double cone_excess(const NormalCone& cone, const glm::dvec3& n) {
+  const double len = glm::length(n);
+  const double phi = std::acos(std::clamp(glm::dot(n / len, glm::dvec3(cone.axis)), -1.0, 1.0));
+  return phi - std::acos(std::clamp(static_cast<double>(cone.cos_half_angle), -1.0, 1.0));
+}
+
+glm::dvec3 face_normal(const TriMesh& m, std::size_t f) {
+  const glm::dvec3 a(m.positions[m.indices[3 * f]]), b(m.positions[m.indices[3 * f + 1]]), c(m.positions[m.indices[3 * f + 2]]);
+  return glm::cross(b - a, c - a);
+}
+
+// Normal cones (the back-face and silhouette criteria): a leaf's cone holds the normals of its faces, a new
+// node's cone those of the faces around it in the mesh its collapse makes, and validate() checks that each
+// cone holds its children's. Tolerance 1e-3 radians, the resolution of a float cosine near 1.
+TEST(QemAnalysis, NormalConesHoldTheirFacesNormals) {
+  TriMesh bumpy = make_grid(16, 12, 0.6f);
+  for (const CollapseCost cost : kCosts) {
+    for (const TriMesh& m : {make_icosphere(3), bumpy, make_torus(20, 10)}) {
+      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
+      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost));
+      h.validate();
+      const TriMesh leaves = mesh_after_collapses(h, 0);
+      std::size_t narrow = 0;
+      for (std::size_t f = 0; f < leaves.num_faces(); ++f)
+        for (int k = 0; k < 3; ++k) {
+          const Index v = leaves.indices[3 * f + k];
+          const NormalCone& cone = h.bound(v).cone;
+          ASSERT_FALSE(cone.is_full()) << "leaf " << v << " of a smooth mesh has no cone";
+          EXPECT_LE(cone_excess(cone, face_normal(leaves, f)), 1e-3) << "leaf " << v << ", face " << f;
+          narrow += cone.cos_half_angle > 0.5f;
+        }
+      EXPECT_EQ(narrow, 3 * leaves.num_faces()) << "leaf cones of a smooth mesh should be narrower than 60 degrees";
+      for (std::size_t i = 0; i < h.num_collapses(); i += std::max<std::size_t>(1, h.num_collapses() / 40)) {
+        const Index vs = static_cast<Index>(h.num_leaves() + i);
+        const NormalCone& cone = h.bound(vs).cone;
+        if (cone.is_full()) continue;
+        const TriMesh after = mesh_after_collapses(h, i + 1);
+        for (std::size_t f = 0; f < after.num_faces(); ++f)
+          for (int k = 0; k < 3; ++k) {
+            if (after.indices[3 * f + k] != vs) continue;
+            EXPECT_LE(cone_excess(cone, face_normal(after, f)), 1e-3) << "node " << vs << ", face " << f;
+          }
+      }
+    }
+  }
+}
+
 TEST(QemAnalysis, NonManifoldInputIsRepairedNotRejected) {
   // Bow-tie (two triangles sharing one vertex) + an edge carrying three faces + a degenerate + a duplicate +
   // an unreferenced vertex.
