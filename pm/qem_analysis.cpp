@@ -197,6 +197,7 @@ class Analysis {
 
   Placement place(Index a, Index b) const;
   Placement place_lt(Index a, Index b) const;
+  glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p) const;
   void set_edge(Index e, Index a, Index b);
   void reinsert_edges_of(Index v);
   // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
@@ -263,6 +264,7 @@ class Analysis {
   std::vector<AttributeQuadric> aq_;
   bool colors_ = false;
   bool lt_ = false;  // Lindstrom-Turk costs and placement (QemOptions::cost)
+  bool volume_ = false;  // QemOptions::preserve_volume applies (quadric cost, no colours)
   std::vector<Run> fadj_;                   // per node: its live faces (only live nodes' runs are kept up to date)
   std::vector<Index> fpool_;
   std::vector<Run> eadj_;                   // per node: its candidate edges
@@ -392,6 +394,43 @@ Analysis::Placement Analysis::place_lt(Index a, Index b) const {
     cost += glm::dot(d, d) * std::max(0.0, fb) / 4.0;
   }
   return Placement{x + o, glm::dvec3(0.0), cost};
+}
+
+// QemOptions::preserve_volume: the quadric's minimiser p moved to the plane where the collapse keeps the
+// volume (Lindstrom-Turk 1998's first constraint). Moving the faces' common corner to x sweeps, for each
+// face t around a or b (fl and fr included), a tetrahedron of signed volume (n_t.x - n_t.t0) / 6 with
+// n_t = (t1 - t0) x (t2 - t0); the sum vanishes on the plane g.x = h, g = sum n_t, h = sum n_t.t0. The
+// point of that plane where the quadric x^T A x + 2 b.x + c is least is p - A^-1 g (g.p - h) / (g.A^-1 g):
+// the step along A^-1 g, the direction the quadric's level sets allow most cheaply. A is positive definite
+// here (p came from Quadric's well-conditioned solve). Local coordinates centred on a, as in place_lt().
+glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p) const {
+  const glm::dvec3 o = geo_[a].p;
+  glm::dvec3 g(0.0);
+  double h = 0.0;
+  auto add_face = [&](const Index* c) {
+    const glm::dvec3 t0 = geo_[c[0]].p - o;
+    const glm::dvec3 n = glm::cross(geo_[c[1]].p - geo_[c[0]].p, geo_[c[2]].p - geo_[c[0]].p);
+    g += n;
+    h += glm::dot(n, t0);
+  };
+  for (const Index* it = faces_begin(a); it != faces_end(a); ++it) add_face(&cur_[3 * *it]);
+  for (const Index* it = faces_begin(b); it != faces_end(b); ++it) {
+    const Index* c = &cur_[3 * *it];
+    if (c[0] != a && c[1] != a && c[2] != a) add_face(c);  // fl and fr are among a's faces
+  }
+  // A^-1 g by cofactors (A symmetric).
+  const Quadric q = geo_[a].q + geo_[b].q;
+  const double c00 = q.a11 * q.a22 - q.a12 * q.a12, c01 = q.a02 * q.a12 - q.a01 * q.a22,
+               c02 = q.a01 * q.a12 - q.a02 * q.a11, c11 = q.a00 * q.a22 - q.a02 * q.a02,
+               c12 = q.a01 * q.a02 - q.a00 * q.a12, c22 = q.a00 * q.a11 - q.a01 * q.a01;
+  const double det = q.a00 * c00 + q.a01 * c01 + q.a02 * c02;
+  const glm::dvec3 y = glm::dvec3(c00 * g.x + c01 * g.y + c02 * g.z, c01 * g.x + c11 * g.y + c12 * g.z,
+                                  c02 * g.x + c12 * g.y + c22 * g.z) / det;
+  const double gy = glm::dot(g, y);
+  if (!(gy > 0.0) || !std::isfinite(gy)) return p;  // no volume to keep (g = 0), or a degenerate solve
+  const glm::dvec3 step = y * ((glm::dot(g, p - o) - h) / gy);
+  const glm::dvec3 x = p - step;
+  return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z) ? x : p;
 }
 
 // Slot e becomes candidate (a, b), with its cost, in the heap; the caller fixes the nodes' runs.
@@ -738,6 +777,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   scale_ = std::max(1e-30, static_cast<double>(box.diagonal()));
   colors_ = opt_.use_colors && !in_.colors.empty();
   lt_ = opt_.cost == CollapseCost::kLindstromTurk && !colors_;
+  volume_ = opt_.preserve_volume && !lt_ && !colors_;
 
   // The hierarchy holds at most 2 nl - 1 nodes; the working state nl slots.
   const std::size_t max_nodes = 2 * nl_;
@@ -938,7 +978,10 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     const Index a = edges_[e].a, b = edges_[e].b;
     touch_faces(a, b);
     const Edge& pe = edges_[e];
-    const Placement pl = std::isnan(pe.p.x) ? place(a, b) : Placement{pe.p, glm::dvec3(0.0), pe.cost, true};
+    Placement pl = std::isnan(pe.p.x) ? place(a, b) : Placement{pe.p, glm::dvec3(0.0), pe.cost, true};
+    // The queue orders by the quadric's own minimum (a lower bound of the cost at the constrained point);
+    // the constraint reads the current faces around a and b, so it is applied here, once per pop.
+    if (volume_ && pl.solved) pl.p = preserve_volume(a, b, pl.p);
     const Verdict verdict = check(a, b, pl.p, step);
     if (next != kInvalid) touch_ends(edges_[next].a, edges_[next].b);
     if (verdict == Verdict::kOk) {

@@ -84,43 +84,47 @@ TEST(Compare, QuickRunOnGeneratedInputsWritesTableAndPictures) {
   EXPECT_TRUE(fs::exists(out / "compare_notes.md"));
 }
 
-// The Lindstrom-Turk analysis gives another hierarchy; the schemes' invariants hold on it too (Kim-Lee
-// forces nothing and misses nothing), and the run says which cost it used.
-TEST(Compare, LindstromTurkCostRunsEveryCase) {
-  const fs::path dir = testing::scratch_dir("compare_lt");
-  const fs::path empty = dir / "no_data";
-  fs::create_directories(empty);
-  const fs::path out = dir / "out";
-  const CmdResult r = run("--quick --quiet --panel 64 --size 16 --cost lindstrom-turk --out " + out.string() +
-                              " --data " + empty.string(),
-                          dir);
-  ASSERT_EQ(r.status, 0) << r.out << r.err;
-  EXPECT_NE(r.out.find("(collapse cost: lindstrom-turk)"), std::string::npos) << r.out;
-  EXPECT_NE(slurp(out / "table.md").find("Collapse cost of the analysis: lindstrom-turk"), std::string::npos);
-  for (const char* name : {"image", "terrain", "bunny", "cow", "dragon"})
-    EXPECT_NE(r.out.find(std::string(name) + ": kim-lee <= hoppe97 <= xia-varshney in #V and #F: "), std::string::npos)
-        << name << "\n" << r.out;
-  EXPECT_EQ(r.out.find("INVALID"), std::string::npos) << r.out;
-  const std::string csv = slurp(out / "table.csv");
-  std::istringstream lines(csv);
-  std::string line;
-  std::getline(lines, line);
-  int kim_lee_rows = 0;
-  while (std::getline(lines, line)) {
-    if (line.find(",kim-lee,") == std::string::npos) continue;
-    ++kim_lee_rows;
-    // Columns 12, 13, 15: forced vsplits, forced ecols, missing (see the quick run above); no quoted cells
-    // before column 15 in these rows.
-    std::vector<std::string> f;
-    std::stringstream cells(line);
-    std::string cell;
-    while (std::getline(cells, cell, ',')) f.push_back(cell);
-    ASSERT_GE(f.size(), 16u) << line;
-    EXPECT_EQ(f[12], "0") << line;
-    EXPECT_EQ(f[13], "0") << line;
-    EXPECT_EQ(f[15], "0") << line;
+// The Lindstrom-Turk analysis and the plain quadric placement give other hierarchies; the schemes'
+// invariants hold on them too (Kim-Lee forces nothing and misses nothing), and the run says which cost it
+// used.
+TEST(Compare, OtherCostsRunEveryCase) {
+  for (const std::string cost : {"lindstrom-turk", "quadric-plain"}) {
+    SCOPED_TRACE(cost);
+    const fs::path dir = testing::scratch_dir("compare_" + cost);
+    const fs::path empty = dir / "no_data";
+    fs::create_directories(empty);
+    const fs::path out = dir / "out";
+    const CmdResult r = run("--quick --quiet --panel 64 --size 16 --cost " + cost + " --out " + out.string() +
+                                " --data " + empty.string(),
+                            dir);
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("(collapse cost: " + cost + ")"), std::string::npos) << r.out;
+    EXPECT_NE(slurp(out / "table.md").find("Collapse cost of the analysis: " + cost), std::string::npos);
+    for (const char* name : {"image", "terrain", "bunny", "cow", "dragon"})
+      EXPECT_NE(r.out.find(std::string(name) + ": kim-lee <= hoppe97 <= xia-varshney in #V and #F: "), std::string::npos)
+          << name << "\n" << r.out;
+    EXPECT_EQ(r.out.find("INVALID"), std::string::npos) << r.out;
+    const std::string csv = slurp(out / "table.csv");
+    std::istringstream lines(csv);
+    std::string line;
+    std::getline(lines, line);
+    int kim_lee_rows = 0;
+    while (std::getline(lines, line)) {
+      if (line.find(",kim-lee,") == std::string::npos) continue;
+      ++kim_lee_rows;
+      // Columns 12, 13, 15: forced vsplits, forced ecols, missing (see the quick run above); no quoted cells
+      // before column 15 in these rows.
+      std::vector<std::string> f;
+      std::stringstream cells(line);
+      std::string cell;
+      while (std::getline(cells, cell, ',')) f.push_back(cell);
+      ASSERT_GE(f.size(), 16u) << line;
+      EXPECT_EQ(f[12], "0") << line;
+      EXPECT_EQ(f[13], "0") << line;
+      EXPECT_EQ(f[15], "0") << line;
+    }
+    EXPECT_EQ(kim_lee_rows, 5) << csv;
   }
-  EXPECT_EQ(kim_lee_rows, 5) << csv;
 }
 
 TEST(Compare, SharedDataQuickRun) {

@@ -35,7 +35,18 @@ QemOptions with_cost(CollapseCost cost) {
   return o;
 }
 
-constexpr CollapseCost kCosts[] = {CollapseCost::kQuadric, CollapseCost::kLindstromTurk};
+// The analysis's three ways of placing vs: the default (quadric order, volume-preserving placement), the
+// plain Garland-Heckbert placement, and Lindstrom-Turk.
+struct Config {
+  const char* name;
+  QemOptions options;
+};
+std::vector<Config> configs() {
+  QemOptions plain;
+  plain.preserve_volume = false;
+  return {{"quadric, volume kept", QemOptions{}}, {"quadric, plain placement", plain},
+          {"Lindstrom-Turk", with_cost(CollapseCost::kLindstromTurk)}};
+}
 
 // Signed volume enclosed by a closed mesh.
 double volume_of(const TriMesh& m) {
@@ -48,10 +59,10 @@ double volume_of(const TriMesh& m) {
 }
 
 TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
-  for (const CollapseCost cost : kCosts) {
+  for (const Config& config : configs()) {
     for (const TriMesh& m : {make_icosphere(2), make_grid(10, 8), make_torus(14, 8)}) {
-      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
-      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost));
+      SCOPED_TRACE(config.name);
+      const VertexHierarchy h = build_vertex_hierarchy(m, config.options);
       h.validate();
       const MeshReport in = analyze_mesh(m);
       for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 17)) {
@@ -73,10 +84,10 @@ TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
 // replaced by their ancestors among the first i nodes. fl holds vt->vu, fr holds vu->vt, fn0..fn3 are the faces
 // across (vu, vl), (vl, vt), (vt, vr), (vr, vu), and the stored ring is the 1-ring of vs in M^(i+1).
 TEST(QemAnalysis, RecordsMatchTheMeshesTheyCollapse) {
-  for (const CollapseCost cost : kCosts) {
+  for (const Config& config : configs()) {
     for (const TriMesh& m : {make_icosphere(2), make_grid(9, 7), make_torus(12, 8)}) {
-      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
-      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost));
+      SCOPED_TRACE(config.name);
+      const VertexHierarchy h = build_vertex_hierarchy(m, config.options);
       h.validate();
       const Index nl = static_cast<Index>(h.num_leaves());
       std::vector<Index> top(h.num_nodes());
@@ -210,6 +221,27 @@ TEST(QemAnalysis, LindstromTurkPreservesVolume) {
   }
 }
 
+// The default placement keeps the enclosed volume at every collapse whose quadric has a well-conditioned
+// minimiser (all of them on these smooth closed meshes); the plain quadric minimiser shrinks them.
+TEST(QemAnalysis, QuadricPlacementKeepsTheVolume) {
+  for (const TriMesh& m : {make_icosphere(3), make_torus(20, 12)}) {
+    QemOptions o;
+    o.target_vertices = 40;
+    const VertexHierarchy h = build_vertex_hierarchy(m, o);
+    h.validate();
+    const double v0 = volume_of(m);
+    ASSERT_GT(h.num_collapses(), 100u);
+    for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 9))
+      EXPECT_NEAR(volume_of(mesh_after_collapses(h, k)), v0, 1e-5 * std::abs(v0)) << "after " << k;
+    const double kept = volume_of(mesh_after_collapses(h, h.num_collapses()));
+    EXPECT_NEAR(kept, v0, 1e-5 * std::abs(v0));
+    o.preserve_volume = false;
+    const VertexHierarchy plain = build_vertex_hierarchy(m, o);
+    const double shrunk = volume_of(mesh_after_collapses(plain, plain.num_collapses()));
+    EXPECT_GT(std::abs(shrunk - v0), 100.0 * std::abs(kept - v0)) << "plain " << shrunk << ", kept " << kept << ", input " << v0;
+  }
+}
+
 // On a flat square the volume constraint keeps every vertex in the plane and the border constraint keeps
 // the enclosed area: the base mesh still covers the unit square exactly, with one border loop.
 TEST(QemAnalysis, LindstromTurkPreservesBorderArea) {
@@ -269,10 +301,10 @@ glm::dvec3 face_normal(const TriMesh& m, std::size_t f) {
 // cone holds its children's. Tolerance 1e-3 radians, the resolution of a float cosine near 1.
 TEST(QemAnalysis, NormalConesHoldTheirFacesNormals) {
   TriMesh bumpy = make_grid(16, 12, 0.6f);
-  for (const CollapseCost cost : kCosts) {
+  for (const Config& config : configs()) {
     for (const TriMesh& m : {make_icosphere(3), bumpy, make_torus(20, 10)}) {
-      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
-      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost));
+      SCOPED_TRACE(config.name);
+      const VertexHierarchy h = build_vertex_hierarchy(m, config.options);
       h.validate();
       const TriMesh leaves = mesh_after_collapses(h, 0);
       std::size_t narrow = 0;
@@ -386,10 +418,10 @@ TEST(QemAnalysis, DirtySharedMeshes) {
   for (const char* rel : {"meshes/dragon_vrip_res4_5205v.ply", "meshes/dragon_vrip_res3_22998v.ply",
                           "meshes/cow_viewpoint_2903v.obj", "meshes/elephant-with-holes_2798v.off"}) {
     const TriMesh m = read_mesh(testing::shared_data(rel));
-    for (const CollapseCost cost : kCosts) {
-      SCOPED_TRACE(cost == CollapseCost::kQuadric ? "quadric" : "Lindstrom-Turk");
+    for (const Config& config : configs()) {
+      SCOPED_TRACE(config.name);
       QemStats stats;
-      const VertexHierarchy h = build_vertex_hierarchy(m, with_cost(cost), &stats);
+      const VertexHierarchy h = build_vertex_hierarchy(m, config.options, &stats);
       h.validate();
       const MeshReport r = analyze_mesh(mesh_after_collapses(h, h.num_collapses()));
       EXPECT_EQ(r.non_manifold_edges, 0u) << rel;
