@@ -7,7 +7,9 @@
 
 #include <glm/vec3.hpp>
 
+#include "multitri/image.hpp"
 #include "multitri/query.hpp"
+#include "multitri/tri_mesh.hpp"
 
 namespace varmesh::app {
 
@@ -15,11 +17,17 @@ namespace varmesh::app {
 std::vector<float> parse_floats(const std::string& text, const std::string& option, std::size_t count);
 glm::vec3 parse_vec3(const std::string& text, const std::string& option);
 
-/// The criteria of `--error E` (E >= 0 given; object units) and `--camera ex,ey,ez,tx,ty,tz,fov` (non-empty:
-/// frustum, back faces and `pixels` of screen-space error on a `viewport`-pixel-high image), appended to
-/// `parts`. Throws InvalidInput naming the option on a non-finite error, a bad camera or non-positive sizes.
+/// The criteria of `--error E` (given unless negative, so that NaN is rejected rather than taken for "not
+/// given"; object units) and `--camera ex,ey,ez,tx,ty,tz,fov` (non-empty: frustum, back faces and `pixels` of
+/// screen-space error on a `viewport`-pixel-high image), appended to `parts`. Throws InvalidInput naming the
+/// option on a non-finite error, a bad camera or non-positive sizes.
 void add_error_and_camera_criteria(float error, const std::string& camera, float pixels, float viewport,
                                    std::vector<Criterion>& parts);
+
+/// Writes `mesh` to `mesh_path`, then `picture` (when not null) to `png_path`. When the picture cannot be
+/// written the mesh file is removed again, so that a failed run leaves neither file. Rethrows the error.
+void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
+                            const Image* picture);
 
 /// Wall-clock stopwatch in milliseconds.
 class Stopwatch {

@@ -53,7 +53,7 @@ glm::vec3 parse_vec3(const std::string& text, const std::string& option) {
 
 void add_error_and_camera_criteria(float error, const std::string& camera, float pixels, float viewport,
                                    std::vector<Criterion>& parts) {
-  if (error >= 0.0f) {
+  if (!(error < 0.0f)) {  // NaN counts as given: it must not pass for "no --error"
     if (!std::isfinite(error)) throw InvalidInput("--error must be finite");
     parts.push_back(Criterion::object_error(error));
   }
@@ -71,6 +71,19 @@ void add_error_and_camera_criteria(float error, const std::string& camera, float
   cam.z_far = 1e7f;
   parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
                                      Criterion::screen_error(cam, viewport, pixels)}));
+}
+
+void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
+                            const Image* picture) {
+  write_mesh(mesh_path, mesh);
+  if (!picture) return;
+  try {
+    write_png(png_path, *picture);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(mesh_path, ec);
+    throw;
+  }
 }
 
 Step::Step(const char* what, bool quiet) : what_(what), quiet_(quiet) {
@@ -111,10 +124,13 @@ struct TerrainArgs {
 };
 
 int cmd_terrain(const TerrainArgs& a) {
+  if (std::isnan(a.error)) throw InvalidInput("terrain: --error must be a number, not NaN");
   if (a.error < 0.0f && a.camera.empty()) throw InvalidInput("terrain: give --error E, --camera ..., or both");
   const std::string ext = std::filesystem::path(a.output).extension().string();
   if (ext != ".obj" && ext != ".ply" && ext != ".off")
     throw InvalidInput("terrain: -o must end in .obj, .ply or .off, not '" + a.output + "'");
+  if (!a.png.empty() && std::filesystem::path(a.png).extension() != ".png")
+    throw InvalidInput("terrain: --png must end in .png, not '" + a.png + "'");
   HeightFieldReadOptions ro;
   ro.decoding = a.terrain_rgb ? PixelDecoding::kTerrainRgb : PixelDecoding::kGray;
   ro.z_scale = a.z_scale;
@@ -155,20 +171,23 @@ int cmd_terrain(const TerrainArgs& a) {
   Stopwatch extract_watch;
   const TriMesh mesh = front.extract_mesh(q);  // the front and its mesh in one pass where the query allows
   const double extract_ms = extract_watch.ms();
-  write_mesh(a.output, mesh);
-  std::printf("grid %zux%zu (lattice %zux%zu, tile %zu), hierarchy %.1f MB built in %.1f ms\n", field.width, field.height,
-              grid.lattice_width(), grid.lattice_height(), grid.tile_size(), double(grid.memory_bytes()) / 1e6, build_ms);
-  std::printf("extracted %zu triangles, %zu vertices in %.2f ms (mesh included) -> %s\n", mesh.num_faces(), mesh.num_vertices(),
-              extract_ms, a.output.c_str());
-  if (a.measure) std::printf("measured max vertical error over all samples: %.6g\n", grid.max_vertical_error(mesh));
+  // The picture is rendered before anything is written, and a failed PNG write takes the mesh with it: a failed
+  // run leaves no output.
+  Image picture;
   if (!a.png.empty()) {
     RenderOptions o;
     o.width = 1024;
     o.height = 768;
     o.height_ramp = true;
     o.wireframe = mesh.num_faces() < 40000;  // denser wireframes turn black at this size
-    write_png(a.png, render_mesh(mesh, default_camera_for(mesh, 4.0f / 3.0f), o));
+    picture = render_mesh(mesh, default_camera_for(mesh, 4.0f / 3.0f), o);
   }
+  write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
+  std::printf("grid %zux%zu (lattice %zux%zu, tile %zu), hierarchy %.1f MB built in %.1f ms\n", field.width, field.height,
+              grid.lattice_width(), grid.lattice_height(), grid.tile_size(), double(grid.memory_bytes()) / 1e6, build_ms);
+  std::printf("extracted %zu triangles, %zu vertices in %.2f ms (mesh included) -> %s\n", mesh.num_faces(), mesh.num_vertices(),
+              extract_ms, a.output.c_str());
+  if (a.measure) std::printf("measured max vertical error over all samples: %.6g\n", grid.max_vertical_error(mesh));
   return 0;
 }
 
@@ -224,7 +243,7 @@ int run(int argc, char** argv) {
   terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)");
   terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)");
   terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)");
-  terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)");
+  terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)")->check(CLI::NonNegativeNumber);
   terrain->add_option("--z-scale", ta.z_scale, "multiply heights by this factor");
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");
   terrain->add_option("--raw-size", ta.raw_size, "W,H of a .raw/.f32 file");

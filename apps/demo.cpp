@@ -46,7 +46,7 @@ std::vector<Segment3> frustum_outline(const Camera& cam, float far_dist, const g
 
 int run_demo(const DemoArgs& a) {
   namespace fs = std::filesystem;
-  fs::create_directories(a.out_dir);
+  if (std::isnan(a.error)) throw InvalidInput("demo: --error must be a number, not NaN");
   const bool quiet = a.quiet;
 
   HeightField field;
@@ -114,22 +114,23 @@ int run_demo(const DemoArgs& a) {
   }
   rows.push_back({"view-dependent", mv.num_faces(), ev, tv});
 
+  // Every picture is rendered before the folder is made or anything is written, so that a failure (a camera
+  // that cannot frame the terrain) leaves no partial output.
+  Image uniform_png, view_png, uniform_topdown_png, view_topdown_png;
   {
-    Step step("writing OBJ files and PNG pictures", quiet);
-    write_mesh((fs::path(a.out_dir) / "uniform.obj").string(), mu);
-    write_mesh((fs::path(a.out_dir) / "view.obj").string(), mv);
+    Step step("rendering PNG pictures", quiet);
     RenderOptions o;
     o.width = 1280;
     o.height = 960;
     o.height_ramp = true;
     const Camera overview = default_camera_for(mu, 4.0f / 3.0f);
-    write_png((fs::path(a.out_dir) / "uniform.png").string(), render_mesh(mu, overview, o));
+    uniform_png = render_mesh(mu, overview, o);
     RenderOptions ov = o;
     ov.width = 1280;
     ov.height = 720;
     ov.wireframe = true;
     ov.wire_color = {0.2f, 0.2f, 0.2f};
-    write_png((fs::path(a.out_dir) / "view_camera.png").string(), render_mesh(mv, cam, ov));
+    view_png = render_mesh(mv, cam, ov);
     // Top-down pictures of coarser versions, so that single triangles are visible at this resolution.
     Camera top;
     top.target = {0.5f * w, 0.5f * h, *zmin};
@@ -148,12 +149,22 @@ int run_demo(const DemoArgs& a) {
     Query qc;
     qc.criterion = Criterion::object_error(8.0f * error);
     coarse.extract_fast(qc);
-    write_png((fs::path(a.out_dir) / "uniform_topdown.png").string(), render_mesh(coarse.to_mesh(), top, ot));
+    uniform_topdown_png = render_mesh(coarse.to_mesh(), top, ot);
     Query qcv;
     qcv.criterion = Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::screen_error(cam, 1080.0f, 8.0f * a.pixels)});
     coarse.extract_fast(qcv);
-    write_png((fs::path(a.out_dir) / "view_topdown.png").string(),
-              render_mesh(coarse.to_mesh(), top, ot, frustum_outline(cam, 1.5f * glm::length(cam.target - cam.eye), {0.9f, 0.1f, 0.1f})));
+    view_topdown_png = render_mesh(coarse.to_mesh(), top, ot,
+                                   frustum_outline(cam, 1.5f * glm::length(cam.target - cam.eye), {0.9f, 0.1f, 0.1f}));
+  }
+  {
+    Step step("writing OBJ files and PNG pictures", quiet);
+    fs::create_directories(a.out_dir);
+    write_mesh((fs::path(a.out_dir) / "uniform.obj").string(), mu);
+    write_mesh((fs::path(a.out_dir) / "view.obj").string(), mv);
+    write_png((fs::path(a.out_dir) / "uniform.png").string(), uniform_png);
+    write_png((fs::path(a.out_dir) / "view_camera.png").string(), view_png);
+    write_png((fs::path(a.out_dir) / "uniform_topdown.png").string(), uniform_topdown_png);
+    write_png((fs::path(a.out_dir) / "view_topdown.png").string(), view_topdown_png);
   }
 
   std::printf("terrain %zu x %zu samples, height range %.2f; 4-8 hierarchy built in %.1f ms (%.1f bytes/sample)\n",

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
@@ -46,7 +48,7 @@ void add_query_options(CLI::App& sub, QueryArgs& a) {
   sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
   sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
   sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
-  sub.add_option("--budget", a.budget, "triangle budget");
+  sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
   sub.add_option("--png", a.png, "also render the result to this PNG");
   sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");
   sub.add_option("--view", a.view, "--png: x,y,z direction from the model towards the eye");
@@ -104,22 +106,48 @@ Camera chosen_camera(const TriMesh& reference, const std::string& up, const std:
   return picture_camera_for(reference, u, v, 4.0f / 3.0f);
 }
 
-void write_level_picture(const std::string& dir, const std::string& name, const TriMesh& mesh, const Camera& cam) {
+// The pictures of `--pictures`, rendered as the build goes and written once the hierarchy is: a failed run
+// leaves neither the hierarchy nor pictures.
+struct Picture {
+  std::string path;
+  Image image;
+  std::size_t faces;
+};
+
+void add_level_picture(std::vector<Picture>& pictures, const std::string& dir, const std::string& name, const TriMesh& mesh,
+                       const Camera& cam) {
   RenderOptions o;
   o.width = 640;
   o.height = 480;
   o.wireframe = mesh.num_faces() < 30000;
   o.smooth = false;
-  const std::string path = (std::filesystem::path(dir) / name).string();
-  write_png(path, render_mesh(mesh, cam, o));
-  std::printf("  %s: %zu faces\n", path.c_str(), mesh.num_faces());
+  pictures.push_back({(std::filesystem::path(dir) / name).string(), render_mesh(mesh, cam, o), mesh.num_faces()});
 }
 
-void prepare_picture_dir(const std::string& dir) {
-  if (dir.empty()) return;
+void check_picture_dir(const std::string& dir) {
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw IoError(dir, "cannot create the pictures folder: " + ec.message());
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+    throw IoError(dir, "cannot create the pictures folder: a file of that name exists");
+}
+
+// Writes the pictures after the hierarchy `output`; on failure removes what this run wrote, `output` included.
+void write_pictures(const std::string& dir, const std::vector<Picture>& pictures, const std::string& output) {
+  if (dir.empty()) return;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const bool existed = fs::exists(dir, ec);
+  std::size_t written = 0;
+  try {
+    fs::create_directories(dir, ec);
+    if (ec) throw IoError(dir, "cannot create the pictures folder: " + ec.message());
+    for (; written < pictures.size(); ++written) write_png(pictures[written].path, pictures[written].image);
+  } catch (...) {
+    for (std::size_t i = 0; i < written; ++i) fs::remove(pictures[i].path, ec);
+    if (!existed) fs::remove(dir, ec);
+    fs::remove(output, ec);
+    throw;
+  }
+  for (const Picture& p : pictures) std::printf("  %s: %zu faces\n", p.path.c_str(), p.faces);
 }
 
 }  // namespace
@@ -129,15 +157,16 @@ int run_build(const BuildArgs& a) {
   if (!std::isfinite(a.tolerance)) throw InvalidInput("build: --tolerance must be a finite number");
   Stopwatch watch;
   Mt mt;
+  std::vector<Picture> pictures;
   if (a.method == "adaptive") {
     AdaptiveHierarchy h = build_adaptive(a);
     std::printf("adaptive: %zu base faces, %zu faces at the tolerance, max level %d\n", h.num_base_faces, h.num_finest_faces, h.max_level);
     if (!a.pictures.empty()) {
-      prepare_picture_dir(a.pictures);
+      check_picture_dir(a.pictures);
       MtFront fine(h.mt);
       for (NodeId n = 1; n < h.mt.num_nodes(); ++n) fine.refine(n);
       const TriMesh mesh = fine.to_mesh();
-      write_level_picture(a.pictures, "adaptive_surface.png", mesh, default_camera_for(mesh, 4.0f / 3.0f));
+      add_level_picture(pictures, a.pictures, "adaptive_surface.png", mesh, default_camera_for(mesh, 4.0f / 3.0f));
       if (!h.domain.empty()) {
         const TriMesh dom = adaptive_domain_mesh(h);
         Camera top = default_camera_for(dom, 4.0f / 3.0f);
@@ -147,7 +176,7 @@ int run_build(const BuildArgs& a) {
         top.up = {0.0f, 1.0f, 0.0f};
         top.z_near = 0.1f * dom.bounds().diagonal();
         top.z_far = 10.0f * dom.bounds().diagonal();
-        write_level_picture(a.pictures, "adaptive_domain.png", dom, top);
+        add_level_picture(pictures, a.pictures, "adaptive_domain.png", dom, top);
       }
     }
     mt = std::move(h.mt);
@@ -160,14 +189,14 @@ int run_build(const BuildArgs& a) {
     std::printf("semiregular: %zu base faces paired into %zu blocks (%zu left over, split 1->2 on the border), %d levels\n",
                 base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, levels);
     if (!a.pictures.empty()) {
-      prepare_picture_dir(a.pictures);
+      check_picture_dir(a.pictures);
       const Camera cam = chosen_camera(base, a.up, a.view);
       MtFront front(mt);
       std::vector<NodeId> by_level;
       for (int level = 0; level <= levels; ++level) {
         for (NodeId n = 1; n < mt.num_nodes(); ++n)
           if (info.node_level[n] == level) front.refine(n);
-        write_level_picture(a.pictures, "semiregular_level" + std::to_string(level) + ".png", front.to_mesh(), cam);
+        add_level_picture(pictures, a.pictures, "semiregular_level" + std::to_string(level) + ".png", front.to_mesh(), cam);
       }
     }
   } else if (a.method == "simplify4k") {
@@ -181,14 +210,14 @@ int run_build(const BuildArgs& a) {
     for (const Simplify4kLevel& l : r.levels) std::printf(" %zu", l.faces);
     std::printf("\n");
     if (!a.pictures.empty()) {
-      prepare_picture_dir(a.pictures);
+      check_picture_dir(a.pictures);
       const Camera cam = chosen_camera(input, a.up, a.view);
       // The levels nearest to the face counts of Velho-Gomes Figure 21, plus the input.
       std::vector<std::size_t> levels{0};
       for (std::size_t target : {1200u, 700u, 400u, 300u, 200u}) levels.push_back(simplify4k_closest_level(r, target));
       levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
       for (std::size_t level : levels)
-        write_level_picture(a.pictures, "simplify4k_level" + std::to_string(level) + ".png", simplify4k_level_mesh(r, level), cam);
+        add_level_picture(pictures, a.pictures, "simplify4k_level" + std::to_string(level) + ".png", simplify4k_level_mesh(r, level), cam);
     }
     mt = std::move(r.mt);
   } else {
@@ -196,6 +225,7 @@ int run_build(const BuildArgs& a) {
   }
   const double ms = watch.ms();
   write_mt(a.output, mt);
+  write_pictures(a.pictures, pictures, a.output);
   print_metrics(mt);
   std::printf("built in %.1f ms -> %s\n", ms, a.output.c_str());
   return 0;
@@ -242,10 +272,9 @@ int run_query(const QueryArgs& a) {
     o.wireframe = mesh.num_faces() < 60000;
     picture = render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o);
   }
-  write_mesh(a.output, mesh);
+  write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
   std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
               st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
-  if (!a.png.empty()) write_png(a.png, picture);
   return 0;
 }
 

@@ -463,7 +463,7 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
 
 int run_subdiv(const SubdivArgs& a) {
   check_limits(a);
-  if (!a.adaptive && (a.error >= 0.0f || !a.camera.empty())) throw InvalidInput("subdiv: --error and --camera need --adaptive");
+  if (!a.adaptive && (!(a.error < 0.0f) || !a.camera.empty())) throw InvalidInput("subdiv: --error and --camera need --adaptive");
   if (!a.figure.empty()) return run_figure(a);
   check_output_paths(a);
   const SchemeInfo& s = parse_scheme(a.scheme);
@@ -510,16 +510,7 @@ int run_subdiv(const SubdivArgs& a) {
     const Camera cam = picture_camera(out, a, 4.0f / 3.0f);
     image = a.adaptive ? render_triangles(out, cam, 1024, 768) : render_polygons(picture, cam, 1024, 768);
   }
-  write_mesh(a.output, out);
-  if (image) {
-    try {
-      write_png(a.png, *image);
-    } catch (...) {
-      std::error_code ec;
-      fs::remove(a.output, ec);  // no partial output: both files or neither
-      throw;
-    }
-  }
+  write_mesh_and_picture(a.output, out, a.png, image ? &*image : nullptr);
   std::printf("%s\n%s\n-> %s%s%s\n", report.c_str(), line, a.output.c_str(), image ? ", " : "", a.png.c_str());
   return 0;
 }

@@ -12,6 +12,9 @@
 namespace varmesh {
 
 std::string read_file(const std::string& path) {
+  // A folder opens as a stream on Linux, and seeking to its end reports a size of up to 2^63 bytes.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw IoError(path, "cannot read: it is a folder, not a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
   std::string data;

@@ -4,7 +4,7 @@
 
 namespace varmesh {
 
-/// Reads a whole file into memory. Throws IoError (file cannot be opened or read).
+/// Reads a whole file into memory. Throws IoError (a folder, or a file that cannot be opened or read).
 std::string read_file(const std::string& path);
 
 /// Writes `contents` to `path` atomically: a temporary file in the same folder, flushed, then renamed over

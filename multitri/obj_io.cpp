@@ -119,7 +119,7 @@ class ObjParser {
       return static_cast<Index>(idx - 1);
     }
     if (idx == 0) cur_.fail(std::string(kind) + " index 0 is invalid (OBJ indices start at 1)");
-    if (-idx > static_cast<std::int64_t>(count))
+    if (idx < -static_cast<std::int64_t>(count))  // not -idx: negating INT64_MIN overflows
       cur_.fail(std::string("relative ") + kind + " index " + std::to_string(idx) + " is out of range (only " +
                 std::to_string(count) + " defined so far)");
     return static_cast<Index>(static_cast<std::int64_t>(count) + idx);

@@ -1,0 +1,189 @@
+// Hostile input and failing outputs, as found by fuzzing the varmesh command: every case exits 1 with one
+// line of error that names the file, line or option at fault, and leaves no output behind.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "multitri/heightfield.hpp"
+#include "multitri/terrain_gen.hpp"
+#include "apps/cli_support.hpp"
+#include "test_support.hpp"
+
+namespace varmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+using testing::CmdResult;
+using testing::count_lines;
+
+CmdResult run(const std::string& args, const fs::path& dir) { return testing::run_varmesh(args, dir); }
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// A height field small enough for a fast run, saved as float32 (17 x 17 samples).
+fs::path write_small_terrain(const fs::path& dir) {
+  const fs::path path = dir / "t.f32";
+  write_heightfield_raw(path.string(), make_fractal_terrain(17, 17, 7, 20.0f));
+  return path;
+}
+
+// A relative index of -2^63 used to be negated (signed overflow, undefined behaviour).
+TEST(Robustness, ObjRelativeIndexOfInt64MinNamesTheLine) {
+  const auto dir = testing::scratch_dir("robust_obj_int64_min");
+  const fs::path obj = dir / "m.obj";
+  std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -9223372036854775808\n";
+  const std::string out = (dir / "out.png").string();
+  const CmdResult r = run("render " + obj.string() + " -o " + out, dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(contains(r.err, obj.string() + ":4:")) << r.err;
+  EXPECT_TRUE(contains(r.err, "relative vertex index -9223372036854775808")) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// A folder opens as a stream and reports a size near 2^63: reading one used to end in std::bad_alloc.
+TEST(Robustness, AFolderGivenAsInputIsNamed) {
+  const auto dir = testing::scratch_dir("robust_folder_input");
+  fs::create_directories(dir / "h.vrm");
+  fs::create_directories(dir / "m.obj");
+  const std::string out = (dir / "out.obj").string();
+  for (const std::string& args : {"query " + (dir / "h.vrm").string() + " --error 0 -o " + out,
+                                  "subdiv " + (dir / "m.obj").string() + " --levels 1 -o " + out}) {
+    const CmdResult r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, "it is a folder, not a file")) << r.err;
+    EXPECT_FALSE(contains(r.err, "bad_alloc")) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  }
+  const CmdResult r = run("info " + (dir / "m.obj").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, (dir / "m.obj").string() + ": cannot read: it is a folder")) << r.err;
+}
+
+// terrain wrote its mesh before rendering and writing --png: a failed picture left the mesh behind.
+TEST(Robustness, TerrainPngFailureLeavesNoMesh) {
+  const auto dir = testing::scratch_dir("robust_terrain_png");
+  const fs::path field = write_small_terrain(dir);
+  const std::string out = (dir / "out.obj").string();
+  const std::string base = "terrain " + field.string() + " --raw-size 17,17 --error 1 -o " + out;
+  CmdResult r = run(base + " --png " + (dir / "missing" / "t.png").string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (dir / "missing" / "t.png").string())) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // A --png that is not a .png is refused before anything runs, as query and subdiv do.
+  r = run(base + " --png " + (dir / "t.jpg").string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, "--png must end in .png")) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir / "t.jpg"));
+  // The working run writes both.
+  r = run(base + " --png " + (dir / "t.png").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out));
+  EXPECT_TRUE(fs::exists(dir / "t.png"));
+}
+
+// query rendered --png first but wrote it after the mesh: a PNG that could not be written left the mesh.
+TEST(Robustness, QueryPngFailureLeavesNoMesh) {
+  const auto dir = testing::scratch_dir("robust_query_png");
+  const fs::path field = write_small_terrain(dir);
+  const std::string vrm = (dir / "h.vrm").string();
+  CmdResult r = run("build " + field.string() + " --raw-size 17,17 --method adaptive --quiet -o " + vrm, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string out = (dir / "out.obj").string();
+  r = run("query " + vrm + " --error 0.5 -o " + out + " --png " + (dir / "missing" / "q.png").string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (dir / "missing" / "q.png").string())) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// build --pictures wrote its PNGs before the hierarchy: an unwritable -o left the pictures behind.
+TEST(Robustness, BuildFailureLeavesNoPictures) {
+  const auto dir = testing::scratch_dir("robust_build_pictures");
+  const fs::path field = write_small_terrain(dir);
+  const fs::path pictures = dir / "pics";
+  const std::string build = "build " + field.string() + " --raw-size 17,17 --method adaptive --quiet --pictures ";
+  const std::string bad_vrm = (dir / "missing" / "h.vrm").string();
+  CmdResult r = run(build + pictures.string() + " -o " + bad_vrm, dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(contains(r.err, bad_vrm)) << r.err;
+  EXPECT_FALSE(fs::exists(pictures));
+  // Pictures that cannot be written take the hierarchy with them.
+  std::ofstream(dir / "file") << "x";
+  const std::string vrm = (dir / "h.vrm").string();
+  r = run(build + (dir / "file" / "pics").string() + " -o " + vrm, dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (dir / "file" / "pics").string())) << r.err;
+  EXPECT_FALSE(fs::exists(vrm));
+  // The working run writes both.
+  r = run(build + pictures.string() + " -o " + vrm, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(vrm));
+  EXPECT_TRUE(fs::exists(pictures / "adaptive_surface.png"));
+}
+
+// --error nan passed every "is it given" test (NaN >= 0 and NaN < 0 are both false): query silently
+// extracted the finest mesh and terrain failed with "any_of: no parts".
+TEST(Robustness, NanErrorIsRejectedByName) {
+  const auto dir = testing::scratch_dir("robust_nan_error");
+  const fs::path field = write_small_terrain(dir);
+  const std::string vrm = (dir / "h.vrm").string();
+  CmdResult r = run("build " + field.string() + " --raw-size 17,17 --method adaptive --quiet -o " + vrm, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string out = (dir / "out.obj").string();
+  for (const std::string& args : {"query " + vrm + " --error nan -o " + out,
+                                  "terrain " + field.string() + " --raw-size 17,17 --error nan -o " + out,
+                                  "subdiv cube --levels 1 --adaptive --error nan -o " + out}) {
+    r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, "--error must be")) << args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  }
+  r = run("demo --quiet --size 17 --error nan --out " + (dir / "demo").string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, "--error must be")) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "demo"));
+}
+
+// CLI11 parses "-1" into a std::size_t as SIZE_MAX: --budget -1 silently meant "no budget".
+TEST(Robustness, NegativeBudgetIsRejectedByName) {
+  const auto dir = testing::scratch_dir("robust_negative_budget");
+  const fs::path field = write_small_terrain(dir);
+  const std::string vrm = (dir / "h.vrm").string();
+  CmdResult r = run("build " + field.string() + " --raw-size 17,17 --method adaptive --quiet -o " + vrm, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string out = (dir / "out.obj").string();
+  for (const std::string& args : {"query " + vrm + " --budget -1 -o " + out,
+                                  "terrain " + field.string() + " --raw-size 17,17 --error 1 --budget -1 -o " + out}) {
+    r = run(args, dir);
+    EXPECT_NE(r.status, 0) << args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, "--budget")) << args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  }
+}
+
+// demo wrote its meshes and then rendered: a terrain whose extent overflows float failed in the renderer and
+// left a half-written folder.
+TEST(Robustness, DemoFailureLeavesNoFolder) {
+  const auto dir = testing::scratch_dir("robust_demo_partial");
+  // A 16-bit PGM whose z_range comment maps the samples onto +-3.4e38: finite heights, infinite extent.
+  std::string pgm = "P5\n# varmesh z_range -3.4e38 3.4e38\n4 4\n65535\n";
+  for (int i = 0; i < 16; ++i) pgm += (i % 2) ? std::string("\xff\xff", 2) : std::string("\x00\x00", 2);
+  std::ofstream(dir / "huge.pgm", std::ios::binary) << pgm;
+  const fs::path out = dir / "demo";
+  const CmdResult r = run("demo --quiet --heightfield " + (dir / "huge.pgm").string() + " --out " + out.string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace varmesh
