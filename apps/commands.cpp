@@ -161,6 +161,8 @@ int cmd_terrain(const TerrainArgs& a) {
     if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
     cam.z_near = 0.1f * a.spacing;
     cam.z_far = 1e7f;
+    if (!(a.pixels > 0.0f) || !std::isfinite(a.pixels) || !(a.viewport > 0.0f) || !std::isfinite(a.viewport))
+      throw InvalidInput("terrain: --pixels and --viewport must be finite and > 0");
     parts.push_back(Criterion::outside_frustum(cam.frustum()));
     parts.push_back(Criterion::screen_error(cam, a.viewport, a.pixels));
   }

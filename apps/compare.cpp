@@ -290,6 +290,8 @@ TriMesh make_torus(int n, int m, float big_r, float small_r) {
 
 struct Options {
   fs::path out;
+  // The files this run wrote, so that a failed run can take them back (no partial output).
+  mutable std::vector<fs::path> written;
   std::vector<std::string> cases;
   fs::path data;
   bool data_present = false;
@@ -302,6 +304,13 @@ struct Options {
   bool preserve_volume = true;  // QemOptions::preserve_volume (quadric cost)
   bool quick = false, quiet = false;
 };
+
+// write_png into the output folder, remembered in o.written.
+void write_output_png(const Options& o, const std::string& name, const Image& image) {
+  const fs::path path = o.out / name;
+  write_png(path.string(), image);
+  o.written.push_back(path);
+}
 
 const char* cost_name(const Options& o) {
   if (o.cost == CollapseCost::kLindstromTurk) return "lindstrom-turk";
@@ -708,7 +717,7 @@ CaseResult run_case(CaseInput in, const Options& o, bool& failed) {
       panels.push_back(std::move(img));
     }
   }
-  write_png((o.out / (r.in.name + "_schemes.png")).string(), compose(panels, 3));
+  write_output_png(o, r.in.name + "_schemes.png", compose(panels, 3));
 
   // Dual pieces (Figures 10c, 11c): each original face split into its three corner regions (corner, edge
   // midpoints, centroid), each region coloured by the active ancestor of its corner, so every active
@@ -756,7 +765,7 @@ CaseResult run_case(CaseInput in, const Options& o, bool& failed) {
     label_panel(img, lines);
     panels.push_back(std::move(img));
   }
-  write_png((o.out / (r.in.name + "_dual_pieces.png")).string(), compose(panels, 3));
+  write_output_png(o, r.in.name + "_dual_pieces.png", compose(panels, 3));
 
   if (r.in.name == "image") {
     // The input picture and its Sobel features (Figure 9a), nearest-neighbour enlarged.
@@ -782,7 +791,7 @@ CaseResult run_case(CaseInput in, const Options& o, bool& failed) {
                                : std::to_string(r.in.features.size()) + " sobel features"});
       two.push_back(std::move(img));
     }
-    write_png((o.out / "image_features.png").string(), compose(two, 2));
+    write_output_png(o, "image_features.png", compose(two, 2));
   }
   return r;
 }
@@ -893,7 +902,11 @@ std::string csv_table(const std::vector<CaseResult>& results) {
   return s.str();
 }
 
-void write_text(const fs::path& path, const std::string& text) { write_file_atomically(path.string(), text); }
+void write_text(const Options& o, const std::string& name, const std::string& text) {
+  const fs::path path = o.out / name;
+  write_file_atomically(path.string(), text);
+  o.written.push_back(path);
+}
 
 }  // namespace
 
@@ -913,8 +926,23 @@ void add_compare_options(CLI::App& sub, CompareArgs& args) {
   sub.add_flag("--quiet", args.quiet, "no progress on stderr");
 }
 
+static int run_compare_in(const Options& o);
+
 int run_compare(const CompareArgs& args) {
   const Options o = parse_options(args);
+  std::error_code ec;
+  const bool existed = fs::exists(o.out, ec);
+  try {
+    return run_compare_in(o);
+  } catch (...) {
+    // No partial output: what this run wrote goes, and the folder too if this run made it.
+    for (const fs::path& p : o.written) fs::remove(p, ec);
+    if (!existed) fs::remove_all(o.out, ec);
+    throw;
+  }
+}
+
+static int run_compare_in(const Options& o) {
   fs::create_directories(o.out);
   if (!o.data_note.empty() && !o.quiet) std::fprintf(stderr, "[varmesh] %s\n", o.data_note.c_str());
 
@@ -953,8 +981,8 @@ int run_compare(const CompareArgs& args) {
        << "\n";
   md << '\n' << markdown_table(results) << '\n';
   for (const CaseResult& r : results) md << "- " << r.ordering_line << '\n';
-  write_text(o.out / "table.md", md.str());
-  write_text(o.out / "table.csv", csv_table(results));
+  write_text(o, "table.md", md.str());
+  write_text(o, "table.csv", csv_table(results));
 
   std::ostringstream notes;
   notes << "# varmesh compare: notes on the expected ordering\n\n"
@@ -984,7 +1012,7 @@ int run_compare(const CompareArgs& args) {
             << " vertex copies), and the analysis stops early on the result (the border vertices of the detached pieces make "
                "its link condition refuse most remaining collapses, and every piece keeps at least 4 vertices); all schemes "
                "share that base, so the comparison still holds, but every count starts higher.\n";
-  write_text(o.out / "compare_notes.md", notes.str());
+  write_text(o, "compare_notes.md", notes.str());
   std::printf("wrote %s/{table.md,table.csv,compare_notes.md} and <case>_schemes.png, <case>_dual_pieces.png%s\n",
               o.out.string().c_str(), std::find(o.cases.begin(), o.cases.end(), "image") != o.cases.end() ? ", image_features.png" : "");
   return failed ? 3 : 0;

@@ -47,6 +47,7 @@ std::vector<Segment3> frustum_outline(const Camera& cam, float far_dist, const g
 int run_demo(const DemoArgs& a) {
   namespace fs = std::filesystem;
   if (std::isnan(a.error)) throw InvalidInput("demo: --error must be a number, not NaN");
+  if (!(a.pixels > 0.0f) || !std::isfinite(a.pixels)) throw InvalidInput("demo: --pixels must be finite and > 0");
   const bool quiet = a.quiet;
 
   HeightField field;

@@ -581,6 +581,13 @@ Camera picture_camera_for(const TriMesh& reference, const glm::vec3& up, const g
     zmin = std::min(zmin, z);
     zmax = std::max(zmax, z);
   }
+  // Every vertex at one point (a mesh of degenerate faces): no extent to fit, so frame a small sphere around
+  // it, large enough for float to keep the eye apart from the target.
+  if (!(dist > 0.0f)) {
+    const glm::vec3 c = box.center();
+    const float around = 1e-3f * std::max({1.0f, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+    return frame_sphere(c, around, -to_eye, 30.0f, aspect, up);
+  }
   cam.target = centre;
   cam.eye = centre - f * dist;
   cam.z_near = std::max(1e-3f * dist, 0.5f * (dist - zmax));

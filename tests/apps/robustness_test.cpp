@@ -185,5 +185,51 @@ TEST(Robustness, DemoFailureLeavesNoFolder) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// compare made its --out folder first and wrote each case's pictures as it went: a case that failed (here
+// an --image that is not an image) left the folder behind, with the earlier cases' files.
+TEST(Robustness, CompareFailureLeavesNoFolder) {
+  const auto dir = testing::scratch_dir("robust_compare_partial");
+  std::ofstream(dir / "bad.png") << "not a png";
+  const fs::path empty = dir / "no_data";
+  fs::create_directories(empty);
+  const fs::path out = dir / "out";
+  const CmdResult r = run("compare --quick --quiet --size 16 --panel 64 --cases terrain,image --image " +
+                              (dir / "bad.png").string() + " --data " + empty.string() + " --out " + out.string(),
+                          dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (dir / "bad.png").string())) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// --pixels 0 reached the screen-space criterion, whose message names neither the command nor the option.
+TEST(Robustness, NonPositivePixelsAreRejectedByName) {
+  const auto dir = testing::scratch_dir("robust_pixels");
+  const fs::path field = write_small_terrain(dir);
+  const std::string out = (dir / "out.obj").string();
+  for (const std::string& args : {"terrain " + field.string() + " --raw-size 17,17 --camera 8,-20,30,8,8,0,60 --pixels 0 -o " + out,
+                                  "demo --quiet --size 17 --pixels 0 --out " + (dir / "demo").string()}) {
+    const CmdResult r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, "--pixels")) << args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir / "demo"));
+}
+
+// A mesh whose vertices all sit at one point has no extent for the picture camera to fit: it used to fail
+// with "camera eye equals target" (subdiv --png) or a zero near plane.
+TEST(Robustness, PointSizedMeshGetsAPicture) {
+  const auto dir = testing::scratch_dir("robust_point_mesh");
+  const fs::path obj = dir / "pt.obj";
+  std::ofstream(obj) << "v 1000 1000 1000\nv 1000 1000 1000\nv 1000 1000 1000\nv 1000 1000 1000\nf 1 2 3\nf 1 3 4\n";
+  const std::string out = (dir / "o.obj").string(), png = (dir / "o.png").string();
+  const CmdResult r = run("subdiv " + obj.string() + " --levels 1 -o " + out + " --png " + png, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out));
+  EXPECT_TRUE(fs::exists(png));
+}
+
 }  // namespace
 }  // namespace varmesh
