@@ -204,37 +204,36 @@ TEST(QemAnalysis, BorderIsPreserved) {
   EXPECT_EQ(corners, 4);
 }
 
+// Builds the hierarchy of a closed mesh down to 40 vertices and checks that every M^i (sampled) encloses the
+// original volume, up to float positions; returns the base mesh's volume.
+double expect_volume_kept(const TriMesh& m, const QemOptions& options) {
+  QemOptions o = options;
+  o.target_vertices = 40;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  h.validate();
+  const double v0 = volume_of(m);
+  EXPECT_GT(h.num_collapses(), 100u);
+  for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 9))
+    EXPECT_NEAR(volume_of(mesh_after_collapses(h, k)), v0, 1e-5 * std::abs(v0)) << "after " << k;
+  const double base = volume_of(mesh_after_collapses(h, h.num_collapses()));
+  EXPECT_NEAR(base, v0, 1e-5 * std::abs(v0));
+  return base;
+}
+
 // Lindstrom-Turk placement keeps the enclosed volume: the volume constraint is the first one and always
-// accepted, so every M^i of a closed mesh encloses the original volume (up to float positions).
+// accepted.
 TEST(QemAnalysis, LindstromTurkPreservesVolume) {
-  for (const TriMesh& m : {make_icosphere(3), make_torus(20, 12)}) {
-    QemOptions o = with_cost(CollapseCost::kLindstromTurk);
-    o.target_vertices = 40;
-    const VertexHierarchy h = build_vertex_hierarchy(m, o);
-    h.validate();
-    const double v0 = volume_of(m);
-    ASSERT_GT(h.num_collapses(), 100u);
-    for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 9))
-      EXPECT_NEAR(volume_of(mesh_after_collapses(h, k)), v0, 1e-5 * std::abs(v0)) << "after " << k;
-    EXPECT_NEAR(volume_of(mesh_after_collapses(h, h.num_collapses())), v0, 1e-5 * std::abs(v0));
-    // The quadric placement does not have this property (it shrinks convex shapes a little).
-  }
+  for (const TriMesh& m : {make_icosphere(3), make_torus(20, 12)}) expect_volume_kept(m, with_cost(CollapseCost::kLindstromTurk));
 }
 
 // The default placement keeps the enclosed volume at every collapse whose quadric has a well-conditioned
 // minimiser (all of them on these smooth closed meshes); the plain quadric minimiser shrinks them.
 TEST(QemAnalysis, QuadricPlacementKeepsTheVolume) {
   for (const TriMesh& m : {make_icosphere(3), make_torus(20, 12)}) {
+    const double v0 = volume_of(m);
+    const double kept = expect_volume_kept(m, QemOptions{});
     QemOptions o;
     o.target_vertices = 40;
-    const VertexHierarchy h = build_vertex_hierarchy(m, o);
-    h.validate();
-    const double v0 = volume_of(m);
-    ASSERT_GT(h.num_collapses(), 100u);
-    for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 9))
-      EXPECT_NEAR(volume_of(mesh_after_collapses(h, k)), v0, 1e-5 * std::abs(v0)) << "after " << k;
-    const double kept = volume_of(mesh_after_collapses(h, h.num_collapses()));
-    EXPECT_NEAR(kept, v0, 1e-5 * std::abs(v0));
     o.preserve_volume = false;
     const VertexHierarchy plain = build_vertex_hierarchy(m, o);
     const double shrunk = volume_of(mesh_after_collapses(plain, plain.num_collapses()));
