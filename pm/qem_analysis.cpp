@@ -979,14 +979,24 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     touch_faces(a, b);
     const Edge& pe = edges_[e];
     Placement pl = std::isnan(pe.p.x) ? place(a, b) : Placement{pe.p, glm::dvec3(0.0), pe.cost, true};
+    auto too_far = [&] {
+      return std::isfinite(opt_.max_error) && (std::max(uerr_[a], uerr_[b]) + step.local) * scale_ > opt_.max_error;
+    };
     // The queue orders by the quadric's own minimum (a lower bound of the cost at the constrained point);
-    // the constraint reads the current faces around a and b, so it is applied here, once per pop.
+    // the constraint reads the current faces around a and b, so it is applied here, once per pop. Where the
+    // moved point turns a face over or exceeds the error limit, the quadric's own minimiser gets its chance,
+    // so the constraint never costs a collapse the plain placement would make.
+    const glm::dvec3 unmoved = pl.p;
     if (volume_ && pl.solved) pl.p = preserve_volume(a, b, pl.p);
-    const Verdict verdict = check(a, b, pl.p, step);
+    Verdict verdict = check(a, b, pl.p, step);
+    if (pl.p != unmoved && (verdict == Verdict::kFlip || (verdict == Verdict::kOk && too_far()))) {
+      pl.p = unmoved;
+      verdict = check(a, b, pl.p, step);
+    }
     if (next != kInvalid) touch_ends(edges_[next].a, edges_[next].b);
     if (verdict == Verdict::kOk) {
       // Stop before the first collapse whose recorded error would exceed the limit.
-      if (std::isfinite(opt_.max_error) && (std::max(uerr_[a], uerr_[b]) + step.local) * scale_ > opt_.max_error) break;
+      if (too_far()) break;
       collapse(a, b, pl, step);
       ++stats.collapses;
       ++since_rebuild;

@@ -158,19 +158,21 @@ namespace {
 // Whether cone c lies inside cone p up to rounding, without trigonometry: with phi the angle between the
 // axes, c is inside when phi + t <= T + delta (t, T the half-angles), i.e. cos(phi + t) >= cos(T + delta),
 // each side expanded as cos x cos y - sin x sin y with the sines from the cosines (all angles in [0, pi]).
-// delta = 1e-3 radians: a float cosine near 1 resolves an angle only to about 5e-4 radians (acos has an
-// infinite slope at 1), and enclose() of multitri/bounds.cpp decides containment with float acos values.
+// delta = 2e-3 radians: a float cosine near 1 resolves an angle only to about 3.5e-4 radians (acos has an
+// infinite slope at 1), and enclose() of multitri/bounds.cpp decides containment from three float acos
+// values (the measured excesses reach 6e-4).
 bool cone_inside(const NormalCone& c, const NormalCone& p) noexcept {
   if (p.is_full()) return true;
   if (c.is_full()) return false;
   const double cos_phi = std::clamp(static_cast<double>(glm::dot(c.axis, p.axis)), -1.0, 1.0);
   const double cos_t = std::clamp(static_cast<double>(c.cos_half_angle), -1.0, 1.0);
   const double cos_p = std::clamp(static_cast<double>(p.cos_half_angle), -1.0, 1.0);
-  // phi + t > pi (cos t < cos(pi - phi) = -cos phi): c reaches past the antipode of p's axis, which no cone
-  // short of the full one holds.
+  constexpr double kCosDelta = 0.9999980000006666, kSinDelta = 0.0019999986666669333;  // delta = 2e-3
+  if (cos_p <= -kCosDelta) return true;  // T + delta >= pi: p holds every direction up to delta
+  // phi + t > pi (cos t < cos(pi - phi) = -cos phi): c reaches past the antipode of p's axis, which p
+  // (T + delta < pi) does not hold.
   if (cos_t + cos_phi < 0.0) return false;
   auto sine = [](double cosine) { return std::sqrt(std::max(0.0, 1.0 - cosine * cosine)); };
-  constexpr double kCosDelta = 0.9999995000000417, kSinDelta = 0.0009999998333333417;  // delta = 1e-3
   return cos_phi * cos_t - sine(cos_phi) * sine(cos_t) >= cos_p * kCosDelta - sine(cos_p) * kSinDelta;
 }
 

@@ -18,7 +18,7 @@
 ///
 /// Invariants (validate()): parent/children consistent, children created before parents, keys consistent
 /// with the tree shape, bounds nested (child sphere inside parent sphere up to rounding, child error <=
-/// parent error, child cone inside parent cone up to 1e-3 radians), faces' corners are leaves, fl^/fr^
+/// parent error, child cone inside parent cone up to 2e-3 radians), faces' corners are leaves, fl^/fr^
 /// contain vl^/vr^ and one descendant of each child.
 #include <array>
 #include <bit>
