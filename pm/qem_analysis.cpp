@@ -197,7 +197,7 @@ class Analysis {
 
   Placement place(Index a, Index b) const;
   Placement place_lt(Index a, Index b) const;
-  glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p) const;
+  glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const;
   void set_edge(Index e, Index a, Index b);
   void reinsert_edges_of(Index v);
   // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
@@ -402,8 +402,10 @@ Analysis::Placement Analysis::place_lt(Index a, Index b) const {
 // n_t = (t1 - t0) x (t2 - t0); the sum vanishes on the plane g.x = h, g = sum n_t, h = sum n_t.t0. The
 // point of that plane where the quadric x^T A x + 2 b.x + c is least is p - A^-1 g (g.p - h) / (g.A^-1 g):
 // the step along A^-1 g, the direction the quadric's level sets allow most cheaply. A is positive definite
-// here (p came from Quadric's well-conditioned solve). Local coordinates centred on a, as in place_lt().
-glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p) const {
+// here (p came from Quadric's well-conditioned solve). With `nearest`, the step is along g instead: the
+// point of the plane nearest to p (run() tries it when the first one turns a face over). Local coordinates
+// centred on a, as in place_lt().
+glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const {
   const glm::dvec3 o = geo_[a].p;
   glm::dvec3 g(0.0);
   double h = 0.0;
@@ -418,14 +420,16 @@ glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p) cons
     const Index* c = &cur_[3 * *it];
     if (c[0] != a && c[1] != a && c[2] != a) add_face(c);  // fl and fr are among a's faces
   }
-  // A^-1 g by cofactors (A symmetric).
-  const Quadric q = geo_[a].q + geo_[b].q;
-  const double c00 = q.a11 * q.a22 - q.a12 * q.a12, c01 = q.a02 * q.a12 - q.a01 * q.a22,
-               c02 = q.a01 * q.a12 - q.a02 * q.a11, c11 = q.a00 * q.a22 - q.a02 * q.a02,
-               c12 = q.a01 * q.a02 - q.a00 * q.a12, c22 = q.a00 * q.a11 - q.a01 * q.a01;
-  const double det = q.a00 * c00 + q.a01 * c01 + q.a02 * c02;
-  const glm::dvec3 y = glm::dvec3(c00 * g.x + c01 * g.y + c02 * g.z, c01 * g.x + c11 * g.y + c12 * g.z,
-                                  c02 * g.x + c12 * g.y + c22 * g.z) / det;
+  glm::dvec3 y = g;
+  if (!nearest) {  // A^-1 g by cofactors (A symmetric)
+    const Quadric q = geo_[a].q + geo_[b].q;
+    const double c00 = q.a11 * q.a22 - q.a12 * q.a12, c01 = q.a02 * q.a12 - q.a01 * q.a22,
+                 c02 = q.a01 * q.a12 - q.a02 * q.a11, c11 = q.a00 * q.a22 - q.a02 * q.a02,
+                 c12 = q.a01 * q.a02 - q.a00 * q.a12, c22 = q.a00 * q.a11 - q.a01 * q.a01;
+    const double det = q.a00 * c00 + q.a01 * c01 + q.a02 * c02;
+    y = glm::dvec3(c00 * g.x + c01 * g.y + c02 * g.z, c01 * g.x + c11 * g.y + c12 * g.z,
+                   c02 * g.x + c12 * g.y + c22 * g.z) / det;
+  }
   const double gy = glm::dot(g, y);
   if (!(gy > 0.0) || !std::isfinite(gy)) return p;  // no volume to keep (g = 0), or a degenerate solve
   const glm::dvec3 step = y * ((glm::dot(g, p - o) - h) / gy);
@@ -984,13 +988,18 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     };
     // The queue orders by the quadric's own minimum (a lower bound of the cost at the constrained point);
     // the constraint reads the current faces around a and b, so it is applied here, once per pop. Where the
-    // moved point turns a face over or exceeds the error limit, the quadric's own minimiser gets its chance,
-    // so the constraint never costs a collapse the plain placement would make.
-    const glm::dvec3 unmoved = pl.p;
-    if (volume_ && pl.solved) pl.p = preserve_volume(a, b, pl.p);
-    Verdict verdict = check(a, b, pl.p, step);
-    if (pl.p != unmoved && (verdict == Verdict::kFlip || (verdict == Verdict::kOk && too_far()))) {
-      pl.p = unmoved;
+    // moved point turns a face over or exceeds the error limit, the point of the plane nearest to the
+    // minimiser, then the minimiser itself, get their chance: the constraint never costs a collapse that the
+    // plain placement would make.
+    Verdict verdict = Verdict::kOk;
+    if (volume_ && pl.solved) {
+      const glm::dvec3 unmoved = pl.p;
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        pl.p = attempt == 2 ? unmoved : preserve_volume(a, b, unmoved, attempt == 1);
+        verdict = check(a, b, pl.p, step);
+        if (verdict != Verdict::kFlip && !(verdict == Verdict::kOk && too_far())) break;
+      }
+    } else {
       verdict = check(a, b, pl.p, step);
     }
     if (next != kInvalid) touch_ends(edges_[next].a, edges_[next].b);
