@@ -63,7 +63,7 @@ struct QemOptions {
   /// points that keep the volume enclosed by the faces around the edge (Lindstrom-Turk 1998's volume
   /// preservation as a constraint on the Garland-Heckbert placement; the collapse order stays the
   /// quadric's). Lower RMS error on every mesh of the data folder but the fandisk at 1 % (BENCHMARKS.md:
-  /// bunny at 1 % RMS 20.4 -> 17.3e-4 of the diagonal, max 149 -> 83e-4) for a few per cent of time. Where
+  /// bunny at 1 % RMS 20.4 -> 17.2e-4 of the diagonal, max 149 -> 83e-4) for a few per cent of time. Where
   /// the moved point would turn a face over or exceed max_error, the minimiser itself is tried. false: vs at
   /// the quadric's minimiser (GH97). Collapses whose quadric has no well-conditioned minimiser keep the
   /// segment fallback either way.
