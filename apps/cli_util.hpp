@@ -8,6 +8,7 @@
 #include <glm/vec3.hpp>
 
 #include "multitri/image.hpp"
+#include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
 #include "multitri/tri_mesh.hpp"
 
@@ -23,6 +24,12 @@ glm::vec3 parse_vec3(const std::string& text, const std::string& option);
 /// option on a non-finite error, a bad camera or non-positive sizes.
 void add_error_and_camera_criteria(float error, const std::string& camera, float pixels, float viewport,
                                    std::vector<Criterion>& parts);
+
+/// read_mesh(), and an IoError naming the file when the coordinates span more than float can measure (the
+/// bounding box's diagonal overflows, e.g. coordinates near +-3.4e38): every edge length, normal and
+/// bounding sphere downstream would be infinite. read_mesh() itself keeps such files (it round-trips any
+/// finite float); the commands that compute geometry read through this.
+TriMesh read_input_mesh(const std::string& path, ReadInfo* info = nullptr);
 
 /// Writes `mesh` to `mesh_path`, then `picture` (when not null) to `png_path`. When the picture cannot be
 /// written the mesh file is removed again, so that a failed run leaves neither file. Rethrows the error.

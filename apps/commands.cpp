@@ -73,6 +73,16 @@ void add_error_and_camera_criteria(float error, const std::string& camera, float
                                      Criterion::screen_error(cam, viewport, pixels)}));
 }
 
+TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
+  TriMesh mesh = read_mesh(path, info);
+  Box3 box;
+  for (Index i : mesh.indices) box.add(mesh.positions[i]);
+  if (!std::isfinite(box.diagonal()))
+    throw IoError(path, "the coordinates span more than float can measure (the bounding box's diagonal overflows); "
+                        "scale the model down");
+  return mesh;
+}
+
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture) {
   write_mesh(mesh_path, mesh);
@@ -202,7 +212,7 @@ struct RenderArgs {
 
 int cmd_render(const RenderArgs& a) {
   if (std::filesystem::path(a.output).extension() != ".png") throw InvalidInput("render: -o must end in .png");
-  const TriMesh mesh = read_mesh(a.input);
+  const TriMesh mesh = read_input_mesh(a.input);
   const float aspect = float(a.width) / float(a.height);
   Camera cam = default_camera_for(mesh, aspect);
   if (!a.eye.empty()) cam.eye = parse_vec3(a.eye, "--eye");

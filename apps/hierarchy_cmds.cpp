@@ -182,7 +182,7 @@ int run_build(const BuildArgs& a) {
     mt = std::move(h.mt);
   } else if (a.method == "semiregular") {
     if (!is_mesh_file(a.input)) throw InvalidInput("build --method semiregular: INPUT must be a mesh (.obj, .off, .ply)");
-    const TriMesh base = read_mesh(a.input);
+    const TriMesh base = read_input_mesh(a.input);
     SemiRegularInfo info;
     const int levels = a.levels < 0 ? 4 : a.levels;
     mt = build_semiregular_mt(base, levels, {}, &info);
@@ -201,7 +201,7 @@ int run_build(const BuildArgs& a) {
     }
   } else if (a.method == "simplify4k") {
     if (!is_mesh_file(a.input)) throw InvalidInput("build --method simplify4k: INPUT must be a mesh (.obj, .off, .ply)");
-    const TriMesh input = read_mesh(a.input);
+    const TriMesh input = read_input_mesh(a.input);
     Simplify4kOptions so;
     so.max_levels = a.levels > 0 ? a.levels : 64;  // 0 or unset: as many levels as it can
     Simplify4kResult r = simplify4k(input, so);

@@ -165,7 +165,7 @@ Input load_input(const std::string& in) {
   if (!is_mesh_file(in)) throw InvalidInput("subdiv: INPUT must be a mesh (.obj, .off, .ply) or cube | torus, not '" + in + "'");
   r.name = fs::path(in).stem().string();
   ReadInfo info;
-  r.triangles = read_mesh(in, &info);
+  r.triangles = read_input_mesh(in, &info);
   r.triangles.normals.clear();
   r.triangles.texcoords.clear();
   r.triangles.colors.clear();

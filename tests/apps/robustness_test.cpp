@@ -218,6 +218,27 @@ TEST(Robustness, NonPositivePixelsAreRejectedByName) {
   EXPECT_FALSE(fs::exists(dir / "demo"));
 }
 
+// Coordinates near float's limit are finite, but every length computed from them overflows: the commands
+// failed deep inside ("frame_sphere: radius inf", "FourKMesh::set_error ... must be finite") without naming
+// the file or the cause.
+TEST(Robustness, CoordinatesBeyondFloatsReachAreNamed) {
+  const auto dir = testing::scratch_dir("robust_huge_coordinates");
+  const fs::path obj = dir / "huge.obj";
+  std::ofstream(obj) << "v -3e38 0 0\nv 3e38 0 0\nv 0 3e38 0\nv 0 0 3e38\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n";
+  const std::string out = (dir / "out").string();
+  for (const std::string& args : {"render " + obj.string() + " -o " + out + ".png",
+                                  "build " + obj.string() + " --method semiregular -o " + out + ".vrm",
+                                  "subdiv " + obj.string() + " --levels 1 -o " + out + ".obj"}) {
+    const CmdResult r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, obj.string() + ": the coordinates span more than float can measure")) << args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out + ".png"));
+  EXPECT_FALSE(fs::exists(out + ".vrm"));
+  EXPECT_FALSE(fs::exists(out + ".obj"));
+}
+
 // A mesh whose vertices all sit at one point has no extent for the picture camera to fit: it used to fail
 // with "camera eye equals target" (subdiv --png) or a zero near plane.
 TEST(Robustness, PointSizedMeshGetsAPicture) {
