@@ -403,8 +403,8 @@ Analysis::Placement Analysis::place_lt(Index a, Index b) const {
 // point of that plane where the quadric x^T A x + 2 b.x + c is least is p - A^-1 g (g.p - h) / (g.A^-1 g):
 // the step along A^-1 g, the direction the quadric's level sets allow most cheaply. A is positive definite
 // here (p came from Quadric's well-conditioned solve). With `nearest`, the step is along g instead: the
-// point of the plane nearest to p (run() tries it when the first one turns a face over). Local coordinates
-// centred on a, as in place_lt().
+// point of the plane nearest to p (run() tries it when the first one turns a face over or exceeds
+// max_error). Local coordinates centred on a, as in place_lt().
 glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const {
   const glm::dvec3 o = geo_[a].p;
   glm::dvec3 g(0.0);

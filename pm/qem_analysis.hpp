@@ -4,8 +4,9 @@
 ///
 /// Each step collapses the cheapest legal edge (vt, vu) into a new vertex vs placed at the quadric's
 /// minimiser (Quadric::optimal_on_segment: the linear solve when well conditioned, else the best point of
-/// the edge), moved by default to the volume-preserving plane (QemOptions::preserve_volume). QemOptions::cost = CollapseCost::kLindstromTurk orders and places the collapses by
-/// Lindstrom-Turk's memoryless costs instead (lower error, slower: see CollapseCost). Legal means:
+/// the edge), moved by default to the volume-preserving plane (QemOptions::preserve_volume).
+/// QemOptions::cost = CollapseCost::kLindstromTurk orders and places the collapses by Lindstrom-Turk's
+/// memoryless costs instead (lower error, slower: see CollapseCost). Legal means:
 /// - link condition: the common neighbours of vt and vu are exactly the apexes of the edge's faces (two, or
 ///   one on a border edge), and an interior edge does not join two border vertices (Hoppe et al. 1993);
 /// - no duplicate face appears (the tetrahedron case) and the component keeps at least 4 vertices;
@@ -64,9 +65,9 @@ struct QemOptions {
   /// preservation as a constraint on the Garland-Heckbert placement; the collapse order stays the
   /// quadric's). Lower RMS error on every mesh of the data folder but the fandisk at 1 % (BENCHMARKS.md:
   /// bunny at 1 % RMS 20.4 -> 17.2e-4 of the diagonal, max 149 -> 83e-4) for a few per cent of time. Where
-  /// the moved point would turn a face over or exceed max_error, the minimiser itself is tried. false: vs at
-  /// the quadric's minimiser (GH97). Collapses whose quadric has no well-conditioned minimiser keep the
-  /// segment fallback either way.
+  /// the moved point would turn a face over or exceed max_error, the plane's point nearest to the minimiser
+  /// and then the minimiser itself are tried. false: vs at the quadric's minimiser (GH97). Collapses whose
+  /// quadric has no well-conditioned minimiser keep the segment fallback either way.
   bool preserve_volume = true;
   bool use_colors = false;     ///< GH98 attribute quadrics when the input has colours
   double color_weight = 1.0;   ///< colour unit = color_weight * bounding-box diagonal
