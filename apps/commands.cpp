@@ -293,6 +293,15 @@ int run(int argc, char** argv) {
   auto* query = app.add_subcommand("query", "Extract a front of a .vrm hierarchy by error, camera, ramp or budget");
   add_query_options(*query, qa);
 
+  PmBuildArgs pba;
+  PmQueryArgs pqa;
+  auto* pm = app.add_subcommand("pm", "Progressive meshes (Kim-Lee): build a vertex hierarchy (.vmh), query selectively refined meshes");
+  pm->require_subcommand(1);
+  auto* pm_build = pm->add_subcommand("build", "QEM analysis of a mesh into a vertex hierarchy, saved as .vmh");
+  add_pm_build_options(*pm_build, pba);
+  auto* pm_query = pm->add_subcommand("query", "Selectively refined mesh of a .vmh hierarchy by error, camera or budget");
+  add_pm_query_options(*pm_query, pqa);
+
   SubdivArgs sa;
   auto* subdiv = app.add_subcommand("subdiv", "Subdivide a polygon mesh: 4-8, Catmull-Clark, Zwart-Powell, Doo-Sabin, quasi 4-8, linear; uniform or adaptive");
   add_subdiv_options(*subdiv, sa);
@@ -315,6 +324,8 @@ int run(int argc, char** argv) {
     if (*build) return run_build(ba);
     if (*query) return run_query(qa);
     if (*subdiv) return run_subdiv(sa);
+    if (*pm_build) return run_pm_build(pba);
+    if (*pm_query) return run_pm_query(pqa);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "varmesh: error: %s\n", e.what());
     return 1;

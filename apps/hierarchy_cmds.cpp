@@ -24,6 +24,9 @@
 #include "multitri/mt_io.hpp"
 #include "multitri/mt_metrics.hpp"
 #include "multitri/query.hpp"
+#include "pm/hierarchy_io.hpp"
+#include "pm/qem_analysis.hpp"
+#include "pm/sr_mesh.hpp"
 
 namespace varmesh::app {
 
@@ -48,6 +51,35 @@ void add_query_options(CLI::App& sub, QueryArgs& a) {
   sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
   sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
   sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
+  sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
+  sub.add_option("--png", a.png, "also render the result to this PNG");
+  sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");
+  sub.add_option("--view", a.view, "--png: x,y,z direction from the model towards the eye");
+}
+
+void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
+  sub.add_option("INPUT", a.input, "mesh (.obj, .off, .ply)")->required();
+  sub.add_option("-o,--output", a.output, "output hierarchy (.vmh)")->required();
+  sub.add_option("--cost", a.cost,
+                 "quadric (Garland-Heckbert order, volume-preserving placement; default), quadric-plain (vs at the "
+                 "quadric's minimiser) or lindstrom-turk");
+  sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(CLI::NonNegativeNumber);
+  sub.add_option("--vertices", a.vertices, "stop at this many vertices")->check(CLI::NonNegativeNumber);
+  sub.add_option("--max-error", a.max_error, "stop before a collapse whose error exceeds this (object units)");
+  sub.add_flag("--colors", a.colors, "colour quadrics (GH98) when the mesh has vertex colours");
+  sub.add_option("--non-manifold", a.non_manifold, "split (default): cut non-manifold edges and vertices into sheets; "
+                                                    "lock: also keep the copies from collapsing");
+  sub.add_flag("--quiet", a.quiet, "no progress on stderr");
+}
+
+void add_pm_query_options(CLI::App& sub, PmQueryArgs& a) {
+  sub.add_option("HIERARCHY", a.input, ".vmh file from varmesh pm build")->required();
+  sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off)")->required();
+  sub.add_option("--scheme", a.scheme, "kim-lee (default), hoppe97 or xia-varshney: the dependency rules of the refinement");
+  sub.add_option("--error", a.error, "largest node error allowed (object units)");
+  sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
   sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
   sub.add_option("--png", a.png, "also render the result to this PNG");
   sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");
@@ -275,6 +307,78 @@ int run_query(const QueryArgs& a) {
   write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
   std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
               st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  return 0;
+}
+
+int run_pm_build(const PmBuildArgs& a) {
+  if (!is_mesh_file(a.input)) throw InvalidInput("pm build: INPUT must be a mesh (.obj, .off, .ply), not '" + a.input + "'");
+  if (std::filesystem::path(a.output).extension() != ".vmh") throw InvalidInput("pm build: -o must end in .vmh, not '" + a.output + "'");
+  QemOptions o;
+  if (a.cost == "quadric-plain") o.preserve_volume = false;
+  else if (a.cost == "lindstrom-turk") o.cost = CollapseCost::kLindstromTurk;
+  else if (a.cost != "quadric") throw InvalidInput("--cost: unknown '" + a.cost + "' (known: quadric, quadric-plain, lindstrom-turk)");
+  if (a.non_manifold == "lock") o.non_manifold = NonManifoldPolicy::kLock;
+  else if (a.non_manifold != "split") throw InvalidInput("--non-manifold: unknown '" + a.non_manifold + "' (known: split, lock)");
+  if (std::isnan(a.max_error)) throw InvalidInput("--max-error must be a number, not NaN");
+  if (a.max_error >= 0.0f) o.max_error = a.max_error;
+  o.target_faces = a.faces;
+  o.target_vertices = a.vertices;
+  o.use_colors = a.colors;
+  const TriMesh mesh = read_input_mesh(a.input);
+  if (a.colors && !mesh.has_colors()) throw InvalidInput("pm build --colors: '" + a.input + "' has no vertex colours");
+  if (!a.quiet)
+    o.progress = [&](std::size_t done, std::size_t left) {
+      std::fprintf(stderr, "\r[varmesh] %zu collapses, %zu vertices left   ", done, left);
+    };
+  QemStats st;
+  const VertexHierarchy h = build_vertex_hierarchy(mesh, o, &st);
+  if (!a.quiet && st.collapses >= 4096) std::fprintf(stderr, "\n");
+  write_vertex_hierarchy(a.output, h);
+  const InputRepairReport& r = h.repair_report();
+  std::printf("input %zu vertices, %zu faces; repaired: %zu unreferenced vertices, %zu degenerate and %zu duplicate "
+              "faces dropped, %zu vertex copies added\n",
+              r.input_vertices, r.input_faces, r.unreferenced_vertices, r.degenerate_faces, r.duplicate_faces,
+              r.added_vertex_copies);
+  std::printf("%zu collapses (rejected: %zu link, %zu flip) down to a base mesh of %zu vertices, %zu faces; %zu trees, "
+              "depth %d; %.1f bytes per original face; %.3f s -> %s\n",
+              st.collapses, st.rejected_link, st.rejected_flip, st.base_vertices, st.base_faces, h.num_roots(),
+              h.max_depth(), double(h.memory_bytes()) / double(h.num_faces()), st.seconds, a.output.c_str());
+  return 0;
+}
+
+int run_pm_query(const PmQueryArgs& a) {
+  const std::string ext = std::filesystem::path(a.output).extension().string();
+  if (ext != ".obj" && ext != ".ply" && ext != ".off") throw InvalidInput("pm query: -o must end in .obj, .ply or .off, not '" + a.output + "'");
+  if (!a.png.empty() && std::filesystem::path(a.png).extension() != ".png") throw InvalidInput("--png must end in .png");
+  RefinementScheme scheme = RefinementScheme::kKimLee;
+  if (a.scheme == "hoppe97") scheme = RefinementScheme::kHoppe97;
+  else if (a.scheme == "xia-varshney") scheme = RefinementScheme::kXiaVarshney;
+  else if (a.scheme != "kim-lee") throw InvalidInput("--scheme: unknown '" + a.scheme + "' (known: kim-lee, hoppe97, xia-varshney)");
+  if (a.error < 0.0f && a.camera.empty() && a.budget == 0) throw InvalidInput("pm query: give --error E, --camera ... or --budget N");
+  std::vector<Criterion> parts;
+  add_error_and_camera_criteria(a.error, a.camera, a.pixels, a.viewport, parts);
+  const VertexHierarchy h = read_vertex_hierarchy(a.input);
+  Query q;
+  q.criterion = parts.empty() ? Criterion::object_error(0.0f) : parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
+  q.triangle_budget = a.budget;
+  SrMesh sr(h, scheme);
+  Stopwatch watch;
+  const QueryStats st = extract(sr, q);
+  const double ms = watch.ms();
+  const TriMesh mesh = sr.to_mesh();
+  Image picture;
+  if (!a.png.empty()) {
+    RenderOptions o;
+    o.width = 1024;
+    o.height = 768;
+    o.wireframe = mesh.num_faces() < 60000;
+    picture = render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o);
+  }
+  write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
+  const SrStats& s = sr.stats();
+  std::printf("%s: %zu vertices, %zu triangles (%zu vsplits, %zu forced, %zu ecols, %zu forced, #DC %zu%s) in %.2f ms -> %s\n",
+              scheme_name(scheme), mesh.num_vertices(), mesh.num_faces(), s.vsplits, s.forced_vsplits, s.ecols,
+              s.forced_ecols, s.degenerate_cases, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
   return 0;
 }
 

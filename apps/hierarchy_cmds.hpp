@@ -1,6 +1,7 @@
 #pragma once
 // `varmesh build` (a 4-k hierarchy saved as a .vrm Multi-Triangulation file) and `varmesh query` (a front of
-// any .vrm file by error, camera or a linear ramp of triangle size).
+// any .vrm file by error, camera or a linear ramp of triangle size); `varmesh pm build` / `varmesh pm query`,
+// the same pair for the Kim-Lee progressive-mesh hierarchy (.vmh).
 #include <cstddef>
 #include <string>
 
@@ -29,9 +30,35 @@ struct QueryArgs {
   std::string up, view;   ///< --png: "x,y,z" up axis and direction towards the eye (empty: defaults)
 };
 
+/// `varmesh pm build`: the Kim-Lee vertex hierarchy (QEM analysis) of a mesh, saved as a .vmh file.
+struct PmBuildArgs {
+  std::string input, output;
+  std::string cost = "quadric";   ///< quadric | quadric-plain | lindstrom-turk
+  std::size_t faces = 0, vertices = 0;  ///< stop targets (0: none; neither: the smallest base mesh)
+  float max_error = -1.0f;        ///< stop before a collapse whose error exceeds this (object units; < 0: none)
+  bool colors = false;            ///< GH98 colour quadrics when the mesh has vertex colours
+  std::string non_manifold = "split";  ///< split | lock
+  bool quiet = false;
+};
+
+/// `varmesh pm query`: a selectively refined mesh of a .vmh hierarchy under one of the three schemes.
+struct PmQueryArgs {
+  std::string input, output, png;
+  std::string scheme = "kim-lee";  ///< kim-lee | hoppe97 | xia-varshney
+  float error = -1.0f;
+  std::string camera;     ///< ex,ey,ez,tx,ty,tz,fov
+  float pixels = 1.0f, viewport = 1080.0f;
+  std::size_t budget = 0;
+  std::string up, view;   ///< --png: "x,y,z" up axis and direction towards the eye (empty: defaults)
+};
+
 void add_build_options(CLI::App& sub, BuildArgs& args);
 void add_query_options(CLI::App& sub, QueryArgs& args);
+void add_pm_build_options(CLI::App& sub, PmBuildArgs& args);
+void add_pm_query_options(CLI::App& sub, PmQueryArgs& args);
 int run_build(const BuildArgs& args);
+int run_pm_build(const PmBuildArgs& args);
+int run_pm_query(const PmQueryArgs& args);
 int run_query(const QueryArgs& args);
 
 }  // namespace varmesh::app

@@ -1,0 +1,135 @@
+// `varmesh pm build` and `varmesh pm query`: the files they write are what the library reads back, a full
+// refinement restores the input, budgets and the schemes' ordering hold, and bad input is named.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "multitri/mesh_io.hpp"
+#include "pm/hierarchy_io.hpp"
+#include "pm/pm_fixtures.hpp"
+#include "apps/cli_support.hpp"
+#include "test_support.hpp"
+
+namespace varmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+using testing::CmdResult;
+using testing::count_lines;
+
+CmdResult run(const std::string& args, const fs::path& dir) { return testing::run_varmesh(args, dir); }
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// A bumpy torus written as OBJ, and its hierarchy built by the command.
+struct Built {
+  fs::path dir, mesh, vmh;
+  TriMesh input;
+};
+
+Built build_torus(const char* name, const std::string& extra = "") {
+  Built b;
+  b.dir = testing::scratch_dir(name);
+  b.mesh = b.dir / "torus.obj";
+  b.vmh = b.dir / "torus.vmh";
+  b.input = testing::make_torus(24, 12);
+  write_mesh(b.mesh.string(), b.input);
+  const CmdResult r = run("pm build " + b.mesh.string() + " -o " + b.vmh.string() + " --quiet " + extra, b.dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  return b;
+}
+
+TEST(PmCli, BuildWritesTheHierarchyTheLibraryReads) {
+  for (const std::string cost : {"quadric", "quadric-plain", "lindstrom-turk"}) {
+    SCOPED_TRACE(cost);
+    const Built b = build_torus(("pm_cli_build_" + cost).c_str(), "--cost " + cost);
+    const VertexHierarchy h = read_vertex_hierarchy(b.vmh.string());
+    h.validate();
+    EXPECT_EQ(h.num_leaves(), b.input.num_vertices());
+    EXPECT_EQ(h.num_faces(), b.input.num_faces());
+    EXPECT_GT(h.num_collapses(), b.input.num_vertices() / 2);
+  }
+  // A face target stops the analysis there.
+  const Built b = build_torus("pm_cli_build_target", "--faces 100");
+  const VertexHierarchy h = read_vertex_hierarchy(b.vmh.string());
+  EXPECT_LE(h.base_faces().size(), 100u);
+  EXPECT_GT(h.base_faces().size(), 90u);
+}
+
+TEST(PmCli, QueryRefinesUnderEachScheme) {
+  const Built b = build_torus("pm_cli_query");
+  // Error 0: every node with an error is split, which on a curved torus is all of them: the input returns.
+  const fs::path full = b.dir / "full.obj";
+  CmdResult r = run("pm query " + b.vmh.string() + " --error 0 -o " + full.string(), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const TriMesh m = read_mesh(full.string());
+  EXPECT_EQ(m.num_faces(), b.input.num_faces());
+  EXPECT_EQ(m.num_vertices(), b.input.num_vertices());
+  // A budget caps the triangles.
+  const fs::path small = b.dir / "small.obj";
+  r = run("pm query " + b.vmh.string() + " --budget 150 -o " + small.string(), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LE(read_mesh(small.string()).num_faces(), 150u);
+  EXPECT_TRUE(contains(r.out, "budget reached")) << r.out;
+  // Under a view, Kim-Lee refines no more than Hoppe-97, which refines no more than Xia-Varshney (Table 2).
+  std::vector<std::size_t> vertices;
+  for (const std::string scheme : {"kim-lee", "hoppe97", "xia-varshney"}) {
+    const fs::path out = b.dir / (scheme + ".obj");
+    r = run("pm query " + b.vmh.string() + " --scheme " + scheme + " --camera 3,-2,2,0.8,0,0,30 -o " + out.string(), b.dir);
+    ASSERT_EQ(r.status, 0) << scheme << "\n" << r.err;
+    EXPECT_TRUE(contains(r.out, scheme + ":")) << r.out;
+    vertices.push_back(read_mesh(out.string()).num_vertices());
+  }
+  EXPECT_LE(vertices[0], vertices[1]);
+  EXPECT_LE(vertices[1], vertices[2]);
+  EXPECT_LT(vertices[0], b.input.num_vertices()) << "the view should leave part of the torus coarse";
+  // --png renders the result beside the mesh.
+  const fs::path png = b.dir / "q.png";
+  r = run("pm query " + b.vmh.string() + " --error 0.01 -o " + (b.dir / "q.obj").string() + " --png " + png.string(), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(png));
+}
+
+TEST(PmCli, BadInputIsNamed) {
+  const Built b = build_torus("pm_cli_bad");
+  const std::string out = (b.dir / "out.obj").string();
+  struct Case {
+    std::string args, message;
+  };
+  const std::vector<Case> cases = {
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vrm").string(), "-o must end in .vmh"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --cost fast", "--cost: unknown 'fast'"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --colors", "has no vertex colours"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error nan", "--max-error must be"},
+      {"pm query " + b.vmh.string() + " -o " + out, "give --error E, --camera ... or --budget N"},
+      {"pm query " + b.vmh.string() + " --error 1 --scheme fast -o " + out, "--scheme: unknown 'fast'"},
+      {"pm query " + b.vmh.string() + " --error nan -o " + out, "--error must be"},
+      {"pm query " + b.mesh.string() + " --error 1 -o " + out, b.mesh.string()},
+  };
+  for (const Case& c : cases) {
+    const CmdResult r = run(c.args, b.dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.message)) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(b.dir / "h.vmh"));
+  EXPECT_FALSE(fs::exists(b.dir / "h.vrm"));
+  // A truncated hierarchy file is refused by name, and leaves no output.
+  {
+    std::ifstream in(b.vmh, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(b.dir / "cut.vmh", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
+  const CmdResult r = run("pm query " + (b.dir / "cut.vmh").string() + " --error 1 -o " + out, b.dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (b.dir / "cut.vmh").string())) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace varmesh
