@@ -43,18 +43,26 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
   sub.add_flag("--quiet", a.quiet, "no progress on stderr");
 }
 
-void add_query_options(CLI::App& sub, QueryArgs& a) {
-  sub.add_option("HIERARCHY", a.input, ".vrm file from varmesh build")->required();
+namespace {
+
+void add_view_query_options(CLI::App& sub, ViewQueryArgs& a, const char* hierarchy) {
+  sub.add_option("HIERARCHY", a.input, hierarchy)->required();
   sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off)")->required();
   sub.add_option("--error", a.error, "largest node error allowed (object units)");
   sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
   sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
   sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
-  sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
   sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
   sub.add_option("--png", a.png, "also render the result to this PNG");
   sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");
   sub.add_option("--view", a.view, "--png: x,y,z direction from the model towards the eye");
+}
+
+}  // namespace
+
+void add_query_options(CLI::App& sub, QueryArgs& a) {
+  add_view_query_options(sub, a, ".vrm file from varmesh build");
+  sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
 }
 
 void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
@@ -73,17 +81,8 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
 }
 
 void add_pm_query_options(CLI::App& sub, PmQueryArgs& a) {
-  sub.add_option("HIERARCHY", a.input, ".vmh file from varmesh pm build")->required();
-  sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off)")->required();
+  add_view_query_options(sub, a, ".vmh file from varmesh pm build");
   sub.add_option("--scheme", a.scheme, "kim-lee (default), hoppe97 or xia-varshney: the dependency rules of the refinement");
-  sub.add_option("--error", a.error, "largest node error allowed (object units)");
-  sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
-  sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
-  sub.add_option("--png", a.png, "also render the result to this PNG");
-  sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");
-  sub.add_option("--view", a.view, "--png: x,y,z direction from the model towards the eye");
 }
 
 namespace {
@@ -136,6 +135,16 @@ Camera chosen_camera(const TriMesh& reference, const std::string& up, const std:
   const glm::vec3 v = view.empty() ? glm::vec3(0.0f) : parse_vec3(view, "--view");
   if (!view.empty() && !(glm::length(v) > 0.0f)) throw InvalidInput("--view: the direction is zero");
   return picture_camera_for(reference, u, v, 4.0f / 3.0f);
+}
+
+// The --png of query and pm query: 1024 x 768, wireframe below 60k faces; empty when no --png is asked for.
+Image query_picture(const TriMesh& mesh, const ViewQueryArgs& a) {
+  if (a.png.empty()) return {};
+  RenderOptions o;
+  o.width = 1024;
+  o.height = 768;
+  o.wireframe = mesh.num_faces() < 60000;
+  return render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o);
 }
 
 // The pictures of `--pictures`, rendered as the build goes and written once the hierarchy is: a failed run
@@ -295,15 +304,8 @@ int run_query(const QueryArgs& a) {
   const double ms = watch.ms();
   const TriMesh mesh = front.to_mesh();
   // The picture is rendered before anything is written, so a bad --png, --up or --view leaves no file.
-  Image picture;
-  if (!a.png.empty()) {
-    if (std::filesystem::path(a.png).extension() != ".png") throw InvalidInput("--png must end in .png");
-    RenderOptions o;
-    o.width = 1024;
-    o.height = 768;
-    o.wireframe = mesh.num_faces() < 60000;
-    picture = render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o);
-  }
+  if (!a.png.empty() && std::filesystem::path(a.png).extension() != ".png") throw InvalidInput("--png must end in .png");
+  const Image picture = query_picture(mesh, a);
   write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
   std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
               st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
@@ -366,14 +368,7 @@ int run_pm_query(const PmQueryArgs& a) {
   const QueryStats st = extract(sr, q);
   const double ms = watch.ms();
   const TriMesh mesh = sr.to_mesh();
-  Image picture;
-  if (!a.png.empty()) {
-    RenderOptions o;
-    o.width = 1024;
-    o.height = 768;
-    o.wireframe = mesh.num_faces() < 60000;
-    picture = render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o);
-  }
+  const Image picture = query_picture(mesh, a);
   write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
   const SrStats& s = sr.stats();
   std::printf("%s: %zu vertices, %zu triangles (%zu vsplits, %zu forced, %zu ecols, %zu forced, #DC %zu%s) in %.2f ms -> %s\n",

@@ -20,14 +20,18 @@ struct BuildArgs {
   std::string up, view;        ///< pictures: "x,y,z" up axis and direction towards the eye (empty: defaults)
   bool quiet = false;
 };
-struct QueryArgs {
+/// What `query` and `pm query` share: the hierarchy, the output, the view criteria and the picture.
+struct ViewQueryArgs {
   std::string input, output, png;
   float error = -1.0f;
   std::string camera;     ///< ex,ey,ez,tx,ty,tz,fov
   float pixels = 1.0f, viewport = 1080.0f;
-  std::string ramp;       ///< x0,y0,z0,x1,y1,z1,size0,size1
   std::size_t budget = 0;
   std::string up, view;   ///< --png: "x,y,z" up axis and direction towards the eye (empty: defaults)
+};
+
+struct QueryArgs : ViewQueryArgs {
+  std::string ramp;       ///< x0,y0,z0,x1,y1,z1,size0,size1
 };
 
 /// `varmesh pm build`: the Kim-Lee vertex hierarchy (QEM analysis) of a mesh, saved as a .vmh file.
@@ -42,14 +46,8 @@ struct PmBuildArgs {
 };
 
 /// `varmesh pm query`: a selectively refined mesh of a .vmh hierarchy under one of the three schemes.
-struct PmQueryArgs {
-  std::string input, output, png;
+struct PmQueryArgs : ViewQueryArgs {
   std::string scheme = "kim-lee";  ///< kim-lee | hoppe97 | xia-varshney
-  float error = -1.0f;
-  std::string camera;     ///< ex,ey,ez,tx,ty,tz,fov
-  float pixels = 1.0f, viewport = 1080.0f;
-  std::size_t budget = 0;
-  std::string up, view;   ///< --png: "x,y,z" up axis and direction towards the eye (empty: defaults)
 };
 
 void add_build_options(CLI::App& sub, BuildArgs& args);

@@ -19,11 +19,10 @@ namespace {
 namespace fs = std::filesystem;
 
 using testing::CmdResult;
+using testing::contains;
 using testing::count_lines;
 
 CmdResult run(const std::string& args, const fs::path& dir) { return testing::run_varmesh(args, dir); }
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // A bumpy torus written as OBJ, and its hierarchy built by the command.
 struct Built {

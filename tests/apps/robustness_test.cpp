@@ -17,11 +17,10 @@ namespace {
 namespace fs = std::filesystem;
 
 using testing::CmdResult;
+using testing::contains;
 using testing::count_lines;
 
 CmdResult run(const std::string& args, const fs::path& dir) { return testing::run_varmesh(args, dir); }
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // A height field small enough for a fast run, saved as float32 (17 x 17 samples).
 fs::path write_small_terrain(const fs::path& dir) {
