@@ -606,9 +606,13 @@ TriMesh read_ply(const std::string& path, std::string_view data, ReadInfo& info)
   if (normals) mesh.normals.resize(nv);
   if (colors) mesh.colors.resize(nv);
   if (texcoords) mesh.texcoords.resize(nv);
+  // A triangle takes at least 4 bytes of the body (a list count and three indices of one byte each), so the
+  // reservation stays within 3 x the file size whatever count the header claims (check_body_size only knows
+  // that each list has its count).
+  const std::uint64_t most_triangles = data.size() / 4;
   for (const PlyElement& el : h.elements)
     if (el.kind == ElementKind::kFace)
-      mesh.indices.reserve(mesh.indices.size() + static_cast<std::size_t>(el.count) * 3);
+      mesh.indices.reserve(mesh.indices.size() + static_cast<std::size_t>(std::min(el.count, most_triangles)) * 3);
 
   BodyReader reader(h, mesh, info);
   if (h.format == PlyFormat::kAscii) {
