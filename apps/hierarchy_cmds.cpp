@@ -321,7 +321,8 @@ int run_pm_build(const PmBuildArgs& a) {
   else if (a.cost != "quadric") throw InvalidInput("--cost: unknown '" + a.cost + "' (known: quadric, quadric-plain, lindstrom-turk)");
   if (a.non_manifold == "lock") o.non_manifold = NonManifoldPolicy::kLock;
   else if (a.non_manifold != "split") throw InvalidInput("--non-manifold: unknown '" + a.non_manifold + "' (known: split, lock)");
-  if (std::isnan(a.max_error)) throw InvalidInput("--max-error must be a number, not NaN");
+  if (std::isnan(a.max_error) || (a.max_error < 0.0f && a.max_error != -1.0f))  // -1: not given
+    throw InvalidInput("--max-error must be a number >= 0");
   if (a.max_error >= 0.0f) o.max_error = a.max_error;
   o.target_faces = a.faces;
   o.target_vertices = a.vertices;
