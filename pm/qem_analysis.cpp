@@ -287,6 +287,7 @@ class Analysis {
   std::vector<Index> ring_;  // scratch
   std::vector<EdgeRef> new_edges_;
   std::vector<glm::dvec3> new_normal_;  // scratch of check() for collapse()
+  std::vector<std::uint8_t> stale_;     // per edge, Lindstrom-Turk only: costed before its neighbourhood changed
 
   VertexHierarchyBuilder::Raw raw_;
   std::vector<double> uerr_;  // per node, unit coordinates (per slot too)
@@ -659,26 +660,17 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   eadj_[vs] = {static_cast<Index>(epool_.size()), static_cast<Index>(new_edges_.size())};
   epool_.insert(epool_.end(), new_edges_.begin(), new_edges_.end());
   // Lindstrom-Turk costs are memoryless: they read the faces around both ends, and those of every neighbour
-  // of vs just changed, so every edge at a neighbour is re-costed (and comes back if it had been rejected).
-  // mark_ still holds the ring's stamp: an edge between two neighbours is re-costed from its lower slot.
-  // Those costs read the faces around the second ring, scattered in memory: read the second ring's runs,
-  // then its faces' planes and corners, up front (as above) before the placements wait on them one by one.
+  // of vs just changed. The edges at vs were re-costed above; the others at a neighbour are marked stale
+  // and re-costed when they reach the top of the queue (run(): lazy evaluation), which costs one placement
+  // per pop instead of one per edge of the second ring at every collapse (about 25). A stale edge that had
+  // been rejected comes back into the queue.
   if (lt_) {
     for (Index w : ring_)
       for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e) {
-        touch(fadj_[e->to].off);
-        touch(geo_[e->to].p.x);
-        touch(edges_[e->edge].a);
+        if (e->to == vs) continue;
+        stale_[e->edge] = 1;
+        if (!heap_.contains(e->edge)) heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
       }
-    for (Index w : ring_)
-      for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
-        for (const Index* it = faces_begin(e->to); it != faces_end(e->to); ++it) {
-          touch(fplane_[*it].x);
-          touch(cur_[3 * *it]);
-        }
-    for (Index w : ring_)
-      for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
-        if (e->to != vs && (mark_[e->to] != stamp_ || w < e->to)) set_edge(e->edge, w, e->to);
   }
 
   ElementBound bound;
@@ -951,6 +943,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   }
 
   init_edges();
+  stale_.assign(lt_ ? edges_.size() : 0, 0);
   const std::size_t target_v = opt_.target_vertices;
   const std::size_t target_f = opt_.target_faces;
   auto done = [&] {
@@ -983,6 +976,16 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     touch_faces(a, b);
     const Edge& pe = edges_[e];
     Placement pl = std::isnan(pe.p.x) ? place(a, b) : Placement{pe.p, glm::dvec3(0.0), pe.cost, true};
+    // A stale Lindstrom-Turk edge (its neighbourhood changed since it was costed) has just been placed again:
+    // if its cost rose above the next edge's, it goes back into the queue with that cost.
+    if (lt_ && stale_[e]) {
+      stale_[e] = 0;
+      edges_[e].cost = pl.cost;
+      if (!heap_.empty() && pl.cost > heap_.top_cost()) {
+        heap_.push(e, pl.cost, tie_key(edges_[e]));
+        continue;
+      }
+    }
     auto too_far = [&] {
       return std::isfinite(opt_.max_error) && (std::max(uerr_[a], uerr_[b]) + step.local) * scale_ > opt_.max_error;
     };
