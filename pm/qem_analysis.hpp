@@ -42,9 +42,10 @@ enum class CollapseCost {
   /// faces around both ends): vs preserves the enclosed volume and the border's area vector, then minimises
   /// the squared volumes swept by each face, the squared areas swept by each border edge, and edge lengths;
   /// the cost is the volume term plus edge length^2 times the border term (border_penalty is not used).
-  /// Every collapse re-costs the edges of vs's neighbours: 3-4x the time of kQuadric. At 1 % of the faces
-  /// it cuts the bunny's RMS error by a quarter and its max error by a sixth against the default (by a
-  /// third and a half against the plain GH97 placement; vertex-to-surface distance).
+  /// Every collapse re-costs the edges at vs and marks those of its neighbours stale; a stale edge is placed
+  /// again when it reaches the top of the queue (lazy evaluation): about 2x the time of kQuadric. At 1 % of
+  /// the faces it cuts the bunny's RMS error by a quarter and its max error by a seventh against the default
+  /// (by a third and a half against the plain GH97 placement; vertex-to-surface distance).
   /// Ignored (kQuadric is used) when colours are used.
   kLindstromTurk,
 };
