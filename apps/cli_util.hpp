@@ -11,6 +11,7 @@
 #include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
 #include "multitri/tri_mesh.hpp"
+#include "pm/qem_analysis.hpp"
 
 namespace varmesh::app {
 
@@ -24,6 +25,11 @@ glm::vec3 parse_vec3(const std::string& text, const std::string& option);
 /// option on a non-finite error, a bad camera or non-positive sizes.
 void add_error_and_camera_criteria(float error, const std::string& camera, float pixels, float viewport,
                                    std::vector<Criterion>& parts);
+
+/// `--cost` of the commands that build a vertex hierarchy: quadric (the default: quadric order,
+/// volume-preserving placement), quadric-plain (QemOptions::preserve_volume = false) or lindstrom-turk.
+/// Throws InvalidInput naming the option on anything else.
+void parse_collapse_cost(const std::string& text, CollapseCost& cost, bool& preserve_volume);
 
 /// read_mesh(), and an IoError naming the file when the coordinates span more than float can measure (the
 /// bounding box's diagonal overflows, e.g. coordinates near +-3.4e38): every edge length, normal and

@@ -73,6 +73,14 @@ void add_error_and_camera_criteria(float error, const std::string& camera, float
                                      Criterion::screen_error(cam, viewport, pixels)}));
 }
 
+void parse_collapse_cost(const std::string& text, CollapseCost& cost, bool& preserve_volume) {
+  cost = CollapseCost::kQuadric;
+  preserve_volume = true;
+  if (text == "quadric-plain") preserve_volume = false;
+  else if (text == "lindstrom-turk") cost = CollapseCost::kLindstromTurk;
+  else if (text != "quadric") throw InvalidInput("--cost: unknown '" + text + "' (known: quadric, quadric-plain, lindstrom-turk)");
+}
+
 TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
   TriMesh mesh = read_mesh(path, info);
   Box3 box;

@@ -346,10 +346,7 @@ Options parse_options(const CompareArgs& a) {
   o.feature_fraction = frac;
   o.grid = a.grid_size.empty() ? (a.quick ? 64 : 128) : static_cast<std::size_t>(parse_integer(a.grid_size, "--size", 8, 1024));
   o.panel = static_cast<int>(parse_integer(a.panel, "--panel", 64, 2048));
-  if (a.cost == "quadric") o.cost = CollapseCost::kQuadric;
-  else if (a.cost == "quadric-plain") o.cost = CollapseCost::kQuadric, o.preserve_volume = false;
-  else if (a.cost == "lindstrom-turk") o.cost = CollapseCost::kLindstromTurk;
-  else throw InvalidInput("--cost: unknown '" + a.cost + "' (known: quadric, quadric-plain, lindstrom-turk)");
+  parse_collapse_cost(a.cost, o.cost, o.preserve_volume);
   if (!a.image.empty() && !fs::is_regular_file(a.image)) throw InvalidInput("--image: no such file '" + a.image + "'");
   o.image = a.image;
   if (!a.data_dir.empty()) {

@@ -316,9 +316,7 @@ int run_pm_build(const PmBuildArgs& a) {
   if (!is_mesh_file(a.input)) throw InvalidInput("pm build: INPUT must be a mesh (.obj, .off, .ply), not '" + a.input + "'");
   if (std::filesystem::path(a.output).extension() != ".vmh") throw InvalidInput("pm build: -o must end in .vmh, not '" + a.output + "'");
   QemOptions o;
-  if (a.cost == "quadric-plain") o.preserve_volume = false;
-  else if (a.cost == "lindstrom-turk") o.cost = CollapseCost::kLindstromTurk;
-  else if (a.cost != "quadric") throw InvalidInput("--cost: unknown '" + a.cost + "' (known: quadric, quadric-plain, lindstrom-turk)");
+  parse_collapse_cost(a.cost, o.cost, o.preserve_volume);
   if (a.non_manifold == "lock") o.non_manifold = NonManifoldPolicy::kLock;
   else if (a.non_manifold != "split") throw InvalidInput("--non-manifold: unknown '" + a.non_manifold + "' (known: split, lock)");
   if (std::isnan(a.max_error) || (a.max_error < 0.0f && a.max_error != -1.0f))  // -1: not given

@@ -998,7 +998,9 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     if (volume_ && pl.solved) {
       const glm::dvec3 unmoved = pl.p;
       for (int attempt = 0; attempt < 3; ++attempt) {
-        pl.p = attempt == 2 ? unmoved : preserve_volume(a, b, unmoved, attempt == 1);
+        const glm::dvec3 x = attempt == 2 ? unmoved : preserve_volume(a, b, unmoved, attempt == 1);
+        if (attempt > 0 && x == pl.p) continue;  // the same point again (no volume to keep): same verdict
+        pl.p = x;
         verdict = check(a, b, pl.p, step);
         if (verdict != Verdict::kFlip && !(verdict == Verdict::kOk && too_far())) break;
       }
