@@ -7,6 +7,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "multitri/heightfield.hpp"
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
@@ -30,6 +31,18 @@ void add_error_and_camera_criteria(float error, const std::string& camera, float
 /// volume-preserving placement), quadric-plain (QemOptions::preserve_volume = false) or lindstrom-turk.
 /// Throws InvalidInput naming the option on anything else.
 void parse_collapse_cost(const std::string& text, CollapseCost& cost, bool& preserve_volume);
+
+/// A mesh file name: the extension .obj, .off or .ply, in any case (as read_mesh and write_mesh take them).
+bool is_mesh_file(const std::string& path);
+/// Output-name checks made before any work, so that a wrong name costs nothing and writes nothing. Throw
+/// InvalidInput "<command>: <option> must end in ..., not '<path>'". require_png accepts an empty path (no
+/// picture asked for).
+void require_mesh_output(const std::string& path, const char* command, const char* option = "-o");
+void require_png(const std::string& path, const char* command, const char* option = "--png");
+
+/// `--raw-size W,H` (two positive integers) into `options`; nothing when `text` is empty. Throws
+/// InvalidInput naming the option otherwise.
+void apply_raw_size(const std::string& text, HeightFieldReadOptions& options);
 
 /// read_mesh(), and an IoError naming the file when the coordinates span more than float can measure (the
 /// bounding box's diagonal overflows, e.g. coordinates near +-3.4e38): every edge length, normal and

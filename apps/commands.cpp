@@ -81,6 +81,38 @@ void parse_collapse_cost(const std::string& text, CollapseCost& cost, bool& pres
   else if (text != "quadric") throw InvalidInput("--cost: unknown '" + text + "' (known: quadric, quadric-plain, lindstrom-turk)");
 }
 
+namespace {
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+}  // namespace
+
+bool is_mesh_file(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  return ext == ".obj" || ext == ".off" || ext == ".ply";
+}
+
+void require_mesh_output(const std::string& path, const char* command, const char* option) {
+  if (!is_mesh_file(path))
+    throw InvalidInput(std::string(command) + ": " + option + " must end in .obj, .ply or .off, not '" + path + "'");
+}
+
+void require_png(const std::string& path, const char* command, const char* option) {
+  if (!path.empty() && lower_extension(path) != ".png")
+    throw InvalidInput(std::string(command) + ": " + option + " must end in .png, not '" + path + "'");
+}
+
+void apply_raw_size(const std::string& text, HeightFieldReadOptions& options) {
+  if (text.empty()) return;
+  const auto wh = parse_floats(text, "--raw-size", 2);
+  if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))
+    throw InvalidInput("--raw-size: expected two positive integers W,H");
+  options.raw_width = static_cast<std::size_t>(wh[0]);
+  options.raw_height = static_cast<std::size_t>(wh[1]);
+}
+
 TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
   TriMesh mesh = read_mesh(path, info);
   Box3 box;
@@ -144,21 +176,12 @@ struct TerrainArgs {
 int cmd_terrain(const TerrainArgs& a) {
   if (std::isnan(a.error)) throw InvalidInput("terrain: --error must be a number, not NaN");
   if (a.error < 0.0f && a.camera.empty()) throw InvalidInput("terrain: give --error E, --camera ..., or both");
-  const std::string ext = std::filesystem::path(a.output).extension().string();
-  if (ext != ".obj" && ext != ".ply" && ext != ".off")
-    throw InvalidInput("terrain: -o must end in .obj, .ply or .off, not '" + a.output + "'");
-  if (!a.png.empty() && std::filesystem::path(a.png).extension() != ".png")
-    throw InvalidInput("terrain: --png must end in .png, not '" + a.png + "'");
+  require_mesh_output(a.output, "terrain");
+  require_png(a.png, "terrain");
   HeightFieldReadOptions ro;
   ro.decoding = a.terrain_rgb ? PixelDecoding::kTerrainRgb : PixelDecoding::kGray;
   ro.z_scale = a.z_scale;
-  if (!a.raw_size.empty()) {
-    const auto wh = parse_floats(a.raw_size, "--raw-size", 2);
-    if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))
-      throw InvalidInput("--raw-size: expected two positive integers W,H");
-    ro.raw_width = static_cast<std::size_t>(wh[0]);
-    ro.raw_height = static_cast<std::size_t>(wh[1]);
-  }
+  apply_raw_size(a.raw_size, ro);
   HeightField field = read_heightfield(a.input, ro);
   if (!(a.spacing > 0.0f)) throw InvalidInput("--spacing must be > 0");
   field.spacing_x = field.spacing_y = a.spacing;
@@ -219,7 +242,8 @@ struct RenderArgs {
 };
 
 int cmd_render(const RenderArgs& a) {
-  if (std::filesystem::path(a.output).extension() != ".png") throw InvalidInput("render: -o must end in .png");
+  if (a.output.empty()) throw InvalidInput("render: -o must end in .png");
+  require_png(a.output, "render", "-o");
   const TriMesh mesh = read_input_mesh(a.input);
   const float aspect = float(a.width) / float(a.height);
   Camera cam = default_camera_for(mesh, aspect);

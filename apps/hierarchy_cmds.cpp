@@ -87,11 +87,6 @@ void add_pm_query_options(CLI::App& sub, PmQueryArgs& a) {
 
 namespace {
 
-bool is_mesh_file(const std::string& path) {
-  const std::string ext = std::filesystem::path(path).extension().string();
-  return ext == ".obj" || ext == ".off" || ext == ".ply";
-}
-
 AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   AdaptiveOptions o;
   o.tolerance = a.tolerance;
@@ -106,13 +101,7 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   }
   if (is_mesh_file(a.input)) throw InvalidInput("build --method adaptive: give a height field or torus | saddle | implicit-torus, not a mesh");
   HeightFieldReadOptions ro;
-  if (!a.raw_size.empty()) {
-    const auto wh = parse_floats(a.raw_size, "--raw-size", 2);
-    if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))
-      throw InvalidInput("--raw-size: expected two positive integers W,H");
-    ro.raw_width = static_cast<std::size_t>(wh[0]);
-    ro.raw_height = static_cast<std::size_t>(wh[1]);
-  }
+  apply_raw_size(a.raw_size, ro);
   const HeightField field = read_heightfield(a.input, ro);
   if (o.tolerance <= 0.0f) {
     const auto [lo, hi] = std::minmax_element(field.z.begin(), field.z.end());
@@ -273,8 +262,8 @@ int run_build(const BuildArgs& a) {
 }
 
 int run_query(const QueryArgs& a) {
-  const std::string ext = std::filesystem::path(a.output).extension().string();
-  if (ext != ".obj" && ext != ".ply" && ext != ".off") throw InvalidInput("query: -o must end in .obj, .ply or .off, not '" + a.output + "'");
+  require_mesh_output(a.output, "query");
+  require_png(a.png, "query");
   if (a.error < 0.0f && a.camera.empty() && a.ramp.empty() && a.budget == 0)
     throw InvalidInput("query: give --error E, --camera ..., --ramp ... or --budget N");
   const Mt mt = read_mt(a.input);
@@ -304,7 +293,6 @@ int run_query(const QueryArgs& a) {
   const double ms = watch.ms();
   const TriMesh mesh = front.to_mesh();
   // The picture is rendered before anything is written, so a bad --png, --up or --view leaves no file.
-  if (!a.png.empty() && std::filesystem::path(a.png).extension() != ".png") throw InvalidInput("--png must end in .png");
   const Image picture = query_picture(mesh, a);
   write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
   std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
@@ -348,9 +336,8 @@ int run_pm_build(const PmBuildArgs& a) {
 }
 
 int run_pm_query(const PmQueryArgs& a) {
-  const std::string ext = std::filesystem::path(a.output).extension().string();
-  if (ext != ".obj" && ext != ".ply" && ext != ".off") throw InvalidInput("pm query: -o must end in .obj, .ply or .off, not '" + a.output + "'");
-  if (!a.png.empty() && std::filesystem::path(a.png).extension() != ".png") throw InvalidInput("--png must end in .png");
+  require_mesh_output(a.output, "pm query");
+  require_png(a.png, "pm query");
   RefinementScheme scheme = RefinementScheme::kKimLee;
   if (a.scheme == "hoppe97") scheme = RefinementScheme::kHoppe97;
   else if (a.scheme == "xia-varshney") scheme = RefinementScheme::kXiaVarshney;

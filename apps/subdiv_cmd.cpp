@@ -81,12 +81,6 @@ SubdivScheme primal(Scheme s) {
   }
 }
 
-bool is_mesh_file(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext == ".obj" || ext == ".off" || ext == ".ply";
-}
-
 // The input: the polygon mesh the schemes run on and the triangle mesh quasi48 pairs.
 struct Input {
   enum class Source { kBuiltin, kPolygonFile, kTriangleFile };
@@ -355,8 +349,8 @@ Image grid_image(const std::vector<std::optional<Image>>& cells, std::size_t col
 
 void check_output_paths(const SubdivArgs& a) {
   if (a.output.empty()) throw InvalidInput("subdiv: give -o OUT (.obj, .ply, .off) or --figure DIR");
-  if (!is_mesh_file(a.output)) throw InvalidInput("subdiv: -o must end in .obj, .ply or .off, not '" + a.output + "'");
-  if (!a.png.empty() && fs::path(a.png).extension() != ".png") throw InvalidInput("subdiv: --png must end in .png, not '" + a.png + "'");
+  require_mesh_output(a.output, "subdiv");
+  require_png(a.png, "subdiv");
 }
 
 void check_limits(const SubdivArgs& a) {

@@ -131,5 +131,33 @@ TEST(PmCli, BadInputIsNamed) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// The mesh formats go by extension in any case, as read_mesh and write_mesh take them: pm build used to refuse
+// an INPUT that render accepts (BUNNY.OBJ), and pm query an -o that write_mesh would write.
+TEST(PmCli, MeshExtensionsInAnyCase) {
+  const Built b = build_torus("pm_cli_upper_case");
+  const fs::path upper = b.dir / "TORUS.OBJ";
+  fs::copy_file(b.mesh, upper);
+  const fs::path vmh = b.dir / "upper.vmh";
+  CmdResult r = run("pm build " + upper.string() + " -o " + vmh.string() + " --quiet", b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_vertex_hierarchy(vmh.string()).num_leaves(), b.input.num_vertices());
+  const fs::path out = b.dir / "OUT.PLY", png = b.dir / "OUT.PNG";
+  r = run("pm query " + vmh.string() + " --budget 200 -o " + out.string() + " --png " + png.string(), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LE(read_mesh(out.string()).num_faces(), 200u);
+  EXPECT_TRUE(fs::exists(png));
+  // Not a mesh or not a picture: named with the command and the option, before any work.
+  const fs::path bad = b.dir / "out.stl";
+  r = run("pm query " + vmh.string() + " --budget 200 -o " + bad.string(), b.dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "pm query: -o must end in .obj, .ply or .off, not '" + bad.string() + "'")) << r.err;
+  r = run("pm query " + vmh.string() + " --budget 200 -o " + (b.dir / "x.obj").string() + " --png " +
+              (b.dir / "x.jpg").string(), b.dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "pm query: --png must end in .png")) << r.err;
+  EXPECT_FALSE(fs::exists(bad));
+  EXPECT_FALSE(fs::exists(b.dir / "x.obj"));
+}
+
 }  // namespace
 }  // namespace varmesh
