@@ -571,11 +571,18 @@ std::vector<std::array<FaceId, 3>> face_neighbours(const TriMesh& mesh, const st
     }
   }
   std::vector<std::array<FaceId, 3>> nbr(nf);
-  for (std::size_t f = 0; f < nf; ++f)
+  for (std::size_t f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k) {
       const auto it = owner.find(directed_key(mesh.corner(f, (k + 1) % 3), mesh.corner(f, k)));
       nbr[f][k] = it == owner.end() ? kInvalid : it->second;
     }
+    // Two faces on one vertex triple (a closed "pillow") share all three edges: their first split would make
+    // an edge of three faces.
+    if (nbr[f][0] != kInvalid && nbr[f][0] == nbr[f][1] && nbr[f][1] == nbr[f][2])
+      throw InvalidInput(who + ": base face " + std::to_string(f) + " has the same three vertices as face " +
+                             std::to_string(nbr[f][0]),
+                         f);
+  }
   return nbr;
 }
 
@@ -926,7 +933,29 @@ TriMesh polygonize_freudenthal(const ImplicitSurface& surface) {
                              id);
       }
 
+  // A grid value that is zero up to rounding counts as zero. Otherwise the roots on the vertex's edges land
+  // within rounding of it and of each other: faces of no area, whose orientation is noise and whose edges are
+  // too short to project a midpoint onto the surface. Zero means here: every root on an axis edge at the
+  // vertex would lie within 1e-6 of that edge's length from the vertex.
+  {
+    std::vector<double> snapped = gv;
+    for (std::size_t k = 0; k <= nz; ++k)
+      for (std::size_t j = 0; j <= ny; ++j)
+        for (std::size_t i = 0; i <= nx; ++i) {
+          const std::size_t id = i + sx * (j + sy * k);
+          double rise = 0.0;  // the largest change of f along an axis edge at the vertex
+          const std::array<std::size_t, 3> at{i, j, k}, last{nx, ny, nz}, step{1, sx, sx * sy};
+          for (int axis = 0; axis < 3; ++axis) {
+            if (at[axis] > 0) rise = std::max(rise, std::abs(gv[id - step[axis]] - gv[id]));
+            if (at[axis] < last[axis]) rise = std::max(rise, std::abs(gv[id + step[axis]] - gv[id]));
+          }
+          if (std::abs(gv[id]) <= 1e-6 * rise) snapped[id] = 0.0;
+        }
+    gv = std::move(snapped);
+  }
+
   TriMesh mesh;
+  std::vector<glm::dvec3> exact;  // the vertices in double: the faces are oriented on these
   std::unordered_map<std::uint64_t, Index> vertex_of;  // grid edge (a < b), or (a, a) for a grid vertex with f == 0
   auto edge_vertex = [&](Index in, Index out) -> Index {
     const bool at_vertex = gv[out] == 0.0;
@@ -946,11 +975,12 @@ TriMesh polygonize_freudenthal(const ImplicitSurface& surface) {
       p = 0.5 * (a + b);
     }
     mesh.positions.push_back(glm::vec3(p));
+    exact.push_back(p);
     return it->second;
   };
   auto emit = [&](std::array<Index, 3> t, const glm::dvec3& outward) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return;
-    const glm::dvec3 a(mesh.positions[t[0]]), b(mesh.positions[t[1]]), c(mesh.positions[t[2]]);
+    const glm::dvec3 &a = exact[t[0]], &b = exact[t[1]], &c = exact[t[2]];
     if (glm::dot(glm::cross(b - a, c - a), outward) < 0.0) std::swap(t[1], t[2]);
     mesh.indices.insert(mesh.indices.end(), t.begin(), t.end());
   };

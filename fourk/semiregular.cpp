@@ -414,9 +414,11 @@ FourKMesh build_semiregular_fourk(const TriMesh& base, int levels, const SemiReg
     s.e1 = fk.target(h);
     s.apex = {fk.point(FourKMesh::prev(h)), hm == kInvalid ? kInvalid : fk.point(FourKMesh::prev(hm))};
     s.positions = fk.positions();
-    const glm::vec3 p = options.place_vertex ? options.place_vertex(s)
-                                             : (fk.position(s.e0) + fk.position(s.e1)) * 0.5f;
-    const float len = glm::length(fk.position(s.e1) - fk.position(s.e0));
+    // Midpoint and length in double: in float, |e1 - e0|^2 overflows once coordinates pass ~1.8e19 and
+    // a + b near FLT_MAX, which turned a valid mesh into a "non-finite error" the caller never gave.
+    const glm::dvec3 d0(fk.position(s.e0)), d1(fk.position(s.e1));
+    const glm::vec3 p = options.place_vertex ? options.place_vertex(s) : glm::vec3(0.5 * (d0 + d1));
+    const float len = static_cast<float>(std::min(glm::length(d1 - d0), double(std::numeric_limits<float>::max())));
     s.mid = fk.split(h, p, 0.0f);
     s.positions = fk.positions();
     const float error = options.node_error ? options.node_error(s) : len;

@@ -563,6 +563,48 @@ TEST(AdaptiveImplicit, SphereAndCallerBaseWithAnUnpairedFace) {
   for (const auto& p : mo.positions) EXPECT_NEAR(glm::length(glm::dvec3(p)), 1.0, 1e-6);
 }
 
+// Grid vertices that lie on the surface up to rounding (f about 1e-16, not 0) used to put the roots of
+// their edges within 1e-17 of them: faces of no area, oriented at random ("same direction" errors) or with
+// midpoints that could not be projected. Spheres of radius 0.4 and 0.6 on a 10- or 20-cell grid of [-1, 1]^3
+// hit grid vertices that way, and so do planes just off a grid plane.
+TEST(AdaptiveImplicit, SurfacesThroughGridVerticesUpToRounding) {
+  for (const double r : {0.4, 0.6})
+    for (const int cells : {10, 20}) {
+      SCOPED_TRACE("sphere r = " + std::to_string(r) + ", cells " + std::to_string(cells));
+      ImplicitSurface sphere;
+      sphere.value = [r](const glm::dvec3& p) { return glm::dot(p, p) - r * r; };
+      sphere.cells = {cells, cells, cells};
+      const TriMesh base = polygonize_freudenthal(sphere);
+      for (std::size_t f = 0; f < base.num_faces(); ++f) {
+        const glm::vec3 a = base.positions[base.corner(f, 0)], b = base.positions[base.corner(f, 1)],
+                        c = base.positions[base.corner(f, 2)];
+        EXPECT_GT(glm::length(glm::cross(b - a, c - a)), 0.0f) << "base face " << f << " has no area";
+      }
+      const float tol = 0.002f;
+      AdaptiveHierarchy h;
+      ASSERT_NO_THROW(h = build_adaptive_implicit(sphere, with_tolerance(tol)));
+      ASSERT_NO_THROW(h.mt.validate());
+      const TriMesh m = finest_front(h.mt).to_mesh();
+      std::vector<std::array<Index, 2>> border;
+      ASSERT_TRUE(conforming(m, &border));
+      EXPECT_TRUE(border.empty());
+      EXPECT_EQ(euler_characteristic(m), 2);
+      double worst = 0.0;
+      for (const FaceId f : adaptive_finest_faces(h))
+        for (const auto& b : sample_points(4)) worst = std::max(worst, std::abs(glm::length(flat_point(h.mt, f, b)) - r));
+      EXPECT_LE(worst, tol + slack(tol));
+    }
+  for (const double x0 : {1e-9, 1e-12}) {
+    SCOPED_TRACE("plane x = " + std::to_string(x0));
+    ImplicitSurface plane;
+    plane.value = [x0](const glm::dvec3& p) { return p.x - x0; };
+    plane.cells = {4, 4, 4};
+    const TriMesh base = polygonize_freudenthal(plane);
+    EXPECT_GT(base.num_faces(), 0u);
+    for (const glm::vec3& p : base.positions) EXPECT_NEAR(p.x, 0.0f, 1e-6f);
+  }
+}
+
 template <class Fn>
 void expect_invalid(Fn&& fn, const std::string& needle) {
   try {
@@ -664,6 +706,10 @@ TEST(AdaptiveBadInput, ImplicitSurfacesAndBaseMeshes) {
   expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.1f)); }, "same direction");
   base.indices = {0, 1, 7};
   expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.1f)); }, "");
+  // Two faces on one vertex triple (a closed pillow): its first split used to escape as a logic_error.
+  base.indices = {0, 1, 2, 0, 2, 1};
+  expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.01f)); },
+                 "base face 0 has the same three vertices as face 1");
   base.indices.clear();
   expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.1f)); }, "no face");
   // A base vertex at the centre of the sphere: the gradient vanishes and no direction is known.

@@ -791,6 +791,28 @@ TEST(SemiRegular, ZeroLevelsIsTheBaseMesh) {
   EXPECT_EQ(mt.num_faces(), 20u);
 }
 
+// The default node error (the split edge's length) and the midpoint were computed in float: their squares
+// and sums overflowed once coordinates passed ~1.8e19, and a valid mesh was refused for a "non-finite error"
+// the caller never gave. Scaled copies of one mesh must give the same hierarchy, scaled.
+TEST(SemiRegular, LargeCoordinatesScaleTheHierarchy) {
+  const TriMesh small = icosahedron();
+  TriMesh huge = small;
+  for (glm::vec3& p : huge.positions) p *= 1e20f;
+  const Mt a = build_semiregular_mt(small, 3);
+  Mt b;
+  ASSERT_NO_THROW(b = build_semiregular_mt(huge, 3));
+  b.validate();
+  ASSERT_EQ(a.num_nodes(), b.num_nodes());
+  ASSERT_EQ(a.num_vertices(), b.num_vertices());
+  for (std::size_t v = 0; v < a.num_vertices(); ++v)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(b.position(static_cast<Index>(v))[k], 1e20f * a.position(static_cast<Index>(v))[k], 1e14f) << "vertex " << v;
+  for (std::size_t n = 1; n < a.num_nodes(); ++n) {
+    EXPECT_TRUE(std::isfinite(b.bound(static_cast<NodeId>(n)).error));
+    EXPECT_NEAR(b.bound(static_cast<NodeId>(n)).error, 1e20f * a.bound(static_cast<NodeId>(n)).error, 1e14f) << "node " << n;
+  }
+}
+
 TEST(SemiRegular, BadInputThrowsNamingTheCulprit) {
   auto expect_message = [](const std::function<void()>& fn, const std::string& needle, std::uint64_t element) {
     try {
