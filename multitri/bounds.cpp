@@ -5,18 +5,20 @@
 
 namespace varmesh {
 
+// Distances in double, results in float: |d|^2 of float vectors overflows past coordinates of ~1.8e19 (and
+// would make every sphere of a model that large infinite).
 Sphere enclose(const Sphere& a, const Sphere& b) noexcept {
-  const glm::vec3 d = b.center - a.center;
-  const float dist = glm::length(d);
+  const glm::dvec3 d = glm::dvec3(b.center) - glm::dvec3(a.center);
+  const double dist = glm::length(d);
   // A contained sphere still inflates the result by a relative 1e-6: nested spheres must stay nested
   // after float rounding of the distances computed from them (monotone criteria depend on it).
   if (dist + b.radius <= a.radius) return {a.center, a.radius * (1.0f + 1e-6f) + 1e-12f};
   if (dist + a.radius <= b.radius) return {b.center, b.radius * (1.0f + 1e-6f) + 1e-12f};
-  const float r = 0.5f * (dist + a.radius + b.radius);
+  const double r = 0.5 * (dist + a.radius + b.radius);
   // Centre moves from a towards b so that both spheres touch the new one from inside; a tiny relative
   // slack keeps containment true after float rounding.
-  const glm::vec3 c = a.center + d * ((r - a.radius) / dist);
-  return {c, r * (1.0f + 1e-6f) + 1e-12f};
+  const glm::vec3 c(glm::dvec3(a.center) + d * ((r - a.radius) / dist));
+  return {c, static_cast<float>(r) * (1.0f + 1e-6f) + 1e-12f};
 }
 
 Sphere bounding_sphere(const glm::vec3* points, std::size_t count) noexcept {
@@ -24,12 +26,12 @@ Sphere bounding_sphere(const glm::vec3* points, std::size_t count) noexcept {
   Box3 box;
   for (std::size_t i = 0; i < count; ++i) box.add(points[i]);
   const glm::vec3 c = box.center();
-  float r2 = 0.0f;
+  double r2 = 0.0;
   for (std::size_t i = 0; i < count; ++i) {
-    const glm::vec3 d = points[i] - c;
+    const glm::dvec3 d = glm::dvec3(points[i]) - glm::dvec3(c);
     r2 = std::max(r2, glm::dot(d, d));
   }
-  return {c, std::sqrt(r2) * (1.0f + 1e-6f)};
+  return {c, static_cast<float>(std::sqrt(r2)) * (1.0f + 1e-6f)};
 }
 
 NormalCone enclose(const NormalCone& a, const NormalCone& b) noexcept {

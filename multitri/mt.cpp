@@ -400,8 +400,19 @@ void Mt::pack_bounds(const std::vector<ElementBound>& bounds, bool nest) {
   for (const ElementBound& b : bounds) box.add(b.center);
   frame_.lo = box.lo;
   frame_.step = (box.hi - box.lo) / 65535.0f;
-  const float diag = glm::length(box.hi - box.lo);
-  frame_.unit = diag > 0.0f ? diag : 1.0f;
+  // Lengths in double here and below: |d|^2 of float vectors overflows past coordinates of ~1.8e19.
+  const auto dist = [](const glm::vec3& a, const glm::vec3& b) {
+    return static_cast<float>(glm::length(glm::dvec3(a) - glm::dvec3(b)));
+  };
+  const float diag = dist(box.hi, box.lo);
+  // Radius unit: the diagonal, or the largest radius when that is larger. Radii never exceed the diagonal
+  // on models of ordinary size, but enclose() adds an absolute 1e-12 of float slack, which dwarfs a model
+  // measured in units of 1e-20 and left its spheres "too large to pack".
+  float largest = 0.0f;
+  for (const ElementBound& b : bounds)
+    if (std::isfinite(b.radius)) largest = std::max(largest, b.radius);
+  frame_.unit = std::max(diag, largest);
+  if (!(frame_.unit > 0.0f)) frame_.unit = 1.0f;
   bounds_.resize(bounds.size());
   for (std::size_t n = 0; n < bounds.size(); ++n) {
     const ElementBound& b = bounds[n];
@@ -410,7 +421,7 @@ void Mt::pack_bounds(const std::vector<ElementBound>& bounds, bool nest) {
       const double t = frame_.step[k] > 0.0f ? (double(b.center[k]) - frame_.lo[k]) / frame_.step[k] : 0.0;
       p.c[k] = static_cast<std::uint16_t>(std::clamp(std::lround(t), 0L, 65535L));
     }
-    p.r = frame_.encode_radius(b.radius + glm::length(frame_.center(p.c) - b.center));
+    p.r = frame_.encode_radius(b.radius + dist(frame_.center(p.c), b.center));
     p.error = b.error;
     if (b.cone.is_full()) {
       p.cone = kFullConeCode << 24;
@@ -428,7 +439,7 @@ void Mt::pack_bounds(const std::vector<ElementBound>& bounds, bool nest) {
     for (NodeId c : children(n)) {
       const PackedBound& q = bounds_[c];
       p.error = std::max(p.error, q.error);
-      const float need = glm::length(frame_.center(p.c) - frame_.center(q.c)) + frame_.radius(q.r);
+      const float need = dist(frame_.center(p.c), frame_.center(q.c)) + frame_.radius(q.r);
       if (frame_.radius(p.r) < need * (1.0f + 2e-6f)) p.r = frame_.encode_radius(need);
       const std::uint32_t pa = p.cone >> 24, qa = q.cone >> 24;
       if (pa == kFullConeCode) continue;

@@ -24,7 +24,7 @@ struct Box3 {
 
   bool empty() const noexcept { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
   void add(const glm::vec3& p) noexcept;
-  glm::vec3 center() const noexcept { return (lo + hi) * 0.5f; }
+  glm::vec3 center() const noexcept { return lo * 0.5f + hi * 0.5f; }  // no overflow near FLT_MAX
   glm::vec3 extent() const noexcept { return hi - lo; }
   /// Length of the diagonal; 0 for an empty box.
   float diagonal() const noexcept;

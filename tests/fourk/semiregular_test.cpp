@@ -791,25 +791,32 @@ TEST(SemiRegular, ZeroLevelsIsTheBaseMesh) {
   EXPECT_EQ(mt.num_faces(), 20u);
 }
 
-// The default node error (the split edge's length) and the midpoint were computed in float: their squares
-// and sums overflowed once coordinates passed ~1.8e19, and a valid mesh was refused for a "non-finite error"
-// the caller never gave. Scaled copies of one mesh must give the same hierarchy, scaled.
-TEST(SemiRegular, LargeCoordinatesScaleTheHierarchy) {
-  const TriMesh small = icosahedron();
-  TriMesh huge = small;
-  for (glm::vec3& p : huge.positions) p *= 1e20f;
-  const Mt a = build_semiregular_mt(small, 3);
-  Mt b;
-  ASSERT_NO_THROW(b = build_semiregular_mt(huge, 3));
-  b.validate();
-  ASSERT_EQ(a.num_nodes(), b.num_nodes());
-  ASSERT_EQ(a.num_vertices(), b.num_vertices());
-  for (std::size_t v = 0; v < a.num_vertices(); ++v)
-    for (int k = 0; k < 3; ++k)
-      EXPECT_NEAR(b.position(static_cast<Index>(v))[k], 1e20f * a.position(static_cast<Index>(v))[k], 1e14f) << "vertex " << v;
-  for (std::size_t n = 1; n < a.num_nodes(); ++n) {
-    EXPECT_TRUE(std::isfinite(b.bound(static_cast<NodeId>(n)).error));
-    EXPECT_NEAR(b.bound(static_cast<NodeId>(n)).error, 1e20f * a.bound(static_cast<NodeId>(n)).error, 1e14f) << "node " << n;
+// Scaled copies of one mesh give the same hierarchy, scaled. Far up, the default node error (the split
+// edge's length) and the midpoint were computed in float: their squares and sums overflowed past ~1.8e19 and
+// a valid mesh was refused for a "non-finite error" the caller never gave. Far down, the spheres' absolute
+// float slack (1e-12) dwarfed a model 1e-20 across and the Mt refused them as "too large to pack".
+TEST(SemiRegular, ExtremeScalesScaleTheHierarchy) {
+  const TriMesh unit = icosahedron();
+  const Mt a = build_semiregular_mt(unit, 3);
+  for (const float scale : {1e20f, 1e-20f}) {
+    SCOPED_TRACE("scale " + std::to_string(scale));
+    TriMesh scaled = unit;
+    for (glm::vec3& p : scaled.positions) p *= scale;
+    Mt b;
+    ASSERT_NO_THROW(b = build_semiregular_mt(scaled, 3));
+    b.validate();
+    ASSERT_EQ(a.num_nodes(), b.num_nodes());
+    ASSERT_EQ(a.num_vertices(), b.num_vertices());
+    const float tol = 1e-6f * scale;
+    for (std::size_t v = 0; v < a.num_vertices(); ++v)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(b.position(static_cast<Index>(v))[k], scale * a.position(static_cast<Index>(v))[k], tol) << "vertex " << v;
+    for (std::size_t n = 1; n < a.num_nodes(); ++n) {
+      const ElementBound bb = b.bound(static_cast<NodeId>(n));
+      EXPECT_TRUE(std::isfinite(bb.error));
+      EXPECT_NEAR(bb.error, scale * a.bound(static_cast<NodeId>(n)).error, tol) << "node " << n;
+      EXPECT_TRUE(std::isfinite(bb.radius));
+    }
   }
 }
 
