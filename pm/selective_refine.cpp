@@ -72,22 +72,22 @@ std::vector<std::uint8_t> flag_ancestors(const VertexHierarchy& h, std::span<con
 }
 
 std::vector<std::uint8_t> leaves_of_inputs(const VertexHierarchy& h, std::span<const Index> input_vertices) {
+  // The asked vertices sorted, each with a found flag: memory in the size of the request, not of the
+  // largest input id (a hierarchy file states its input's size).
+  std::vector<Index> wanted(input_vertices.begin(), input_vertices.end());
+  std::sort(wanted.begin(), wanted.end());
+  wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+  std::vector<std::uint8_t> found(wanted.size(), 0);
   const auto l2i = h.leaf_to_input();
-  Index max_input = 0;
-  for (Index i : l2i) max_input = std::max(max_input, i);
-  std::vector<std::uint8_t> wanted(static_cast<std::size_t>(max_input) + 1, 0), found(wanted.size(), 0);
-  for (Index v : input_vertices) {
-    if (v > max_input) throw InvalidInput("leaves_of_inputs: input vertex " + std::to_string(v) + " has no leaf", v);
-    wanted[v] = 1;
-  }
   std::vector<std::uint8_t> leaves(h.num_leaves(), 0);
-  for (std::size_t l = 0; l < l2i.size(); ++l)
-    if (wanted[l2i[l]]) {
-      leaves[l] = 1;
-      found[l2i[l]] = 1;
-    }
-  for (Index v : input_vertices)
-    if (!found[v]) throw InvalidInput("leaves_of_inputs: input vertex " + std::to_string(v) + " has no leaf", v);
+  for (std::size_t l = 0; l < l2i.size(); ++l) {
+    const auto it = std::lower_bound(wanted.begin(), wanted.end(), l2i[l]);
+    if (it == wanted.end() || *it != l2i[l]) continue;
+    leaves[l] = 1;
+    found[static_cast<std::size_t>(it - wanted.begin())] = 1;
+  }
+  for (std::size_t i = 0; i < wanted.size(); ++i)
+    if (!found[i]) throw InvalidInput("leaves_of_inputs: input vertex " + std::to_string(wanted[i]) + " has no leaf", wanted[i]);
   return leaves;
 }
 

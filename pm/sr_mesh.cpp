@@ -91,7 +91,7 @@ SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), sche
   // are collapsible at once: reserved, the list never reallocates (nor throws) inside vsplit, ecol or the
   // rebuild at the end of refine_all/coarsen_all.
   collapsible_.reserve(h.num_leaves() / 2 + 1);
-  for (Ring* ring : {&ring_, &ring2_}) ring->buf.resize(2 * kRingStart);
+  for (Ring* ring : {&ring_, &ring2_, &ring3_}) ring->buf.resize(2 * kRingStart);
   nbrs_.reserve(kLongRing + 1);
   build_base();
   reset();

@@ -31,9 +31,11 @@
 /// transparent huge pages on Linux, and refine_all/coarsen_all walk the fans of the operations a few steps
 /// ahead (prefetches only).
 ///
-/// Query API note: update() may keep a few sibling pairs finer than extract() would, because a Kim-Lee ecol
-/// postponed by the degenerate case (section 4.4) is not retried until its neighbourhood changes; the answer
-/// is still a fixpoint of the query (tests/pm/sr_query_test.cpp).
+/// Query API note: after a collapse, update() retries the collapses next to it (for_each_parent_candidate), so
+/// under Hoppe-97 and Xia-Varshney it reaches extract()'s answer. Under Kim-Lee it may keep a few sibling
+/// pairs finer than extract() would: an ecol postponed by the degenerate case (section 4.4) whose extra common
+/// neighbour goes away through a split of update()'s refine step, after its coarsen step. The answer is
+/// still a fixpoint of the query (tests/pm/sr_query_test.cpp).
 ///
 /// Invariants (validate()): every active face's corners are active; adjacency is symmetric and across
 /// opposite directed edges; every active vertex has one fan of faces (disc or half-disc); node states are
@@ -129,10 +131,16 @@ class SrMesh {
   std::uint64_t tie_key(Index e) const noexcept { return static_cast<std::uint64_t>(h_->num_nodes() - e); }
   void reset();
   template <class Sink> void refine(Index e, Sink&& sink) {
+    check_node(e, "refine");
     sink_ = [](void* ctx, Index v) { (*static_cast<std::remove_reference_t<Sink>*>(ctx))(v); };
     sink_ctx_ = &sink;
+    // The sink lives in the caller's frame: forget it however refine_forced() leaves, or a later vsplit
+    // would call into a dead object.
+    struct Forget {
+      SrMesh* m;
+      ~Forget() { m->sink_ = nullptr, m->sink_ctx_ = nullptr; }
+    } forget{this};
     refine_forced(e);
-    sink_ = nullptr;
   }
   void coarsen_one(Index e) { ecol(e); }
   // Candidates come from the list of active nodes, so a frame costs O(active vertices), not O(nodes).
@@ -179,6 +187,17 @@ class SrMesh {
   template <class Fn> void for_each_parent_candidate(Index e, Fn&& fn) const {
     const Index p = h_->parent(e);
     if (p != kInvalid) fn(p);
+    // Collapsing e can make the collapses next to it legal: Hoppe's ecol needs its fn faces and Xia-Varshney's
+    // its stored rings, and a Kim-Lee ecol postponed by the degenerate case needs a common neighbour gone. So
+    // the collapsible parents of e's neighbours are candidates again too; without them update() stopped short
+    // of extract()'s answer under Hoppe-97 and Xia-Varshney (and a second update() changed the mesh).
+    if (!node_active(e)) return;
+    gather_ring(nodes_[e].corner, ring3_);
+    const std::size_t nn = ring3_.size() + (ring3_.closed ? 0 : 1);
+    for (std::size_t i = 0; i < nn; ++i) {
+      const Index q = h_->parent(ring_neighbor(ring3_, i));
+      if (q != kInvalid && q != p && collapsible(q)) fn(q);
+    }
   }
 
  private:
@@ -309,7 +328,7 @@ class SrMesh {
   void remove_collapsible(Index p) { list_erase<&NodeSlot::corner>(collapsible_, p); }
   SrStats stats_;
   mutable std::vector<Index> list_buf_;  // scratch of the candidate listings
-  mutable Ring ring_, ring2_;
+  mutable Ring ring_, ring2_, ring3_;  // ring3_: for_each_parent_candidate's, apart from vsplit's and ecol's
   mutable Index ecn_for_ = kInvalid;  // extra_common_neighbors(ecn_for_) is ecn_result_, rings in ring_/ring2_
   mutable bool ecn_result_ = false;
   mutable std::vector<Index> nbrs_;  // scratch: the neighbours of vt in extra_common_neighbors

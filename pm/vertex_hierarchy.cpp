@@ -46,11 +46,22 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
   const std::size_t nf = raw.faces.size() / 3;
   if (raw.ring_offsets.size() != nc + 1 || raw.ring_offsets[0] != 0 || raw.ring_offsets.back() != raw.ring_items.size())
     bad("stored rings: offsets inconsistent");
+  for (std::size_t i = 0; i < nc; ++i)
+    if (raw.ring_offsets[i + 1] < raw.ring_offsets[i]) bad("stored rings: offsets decrease at collapse " + std::to_string(i));
   if (raw.leaf_to_input.size() != nl) bad("leaf_to_input: wrong count");
   if (raw.face_to_input.size() != nf) bad("face_to_input: wrong count");
   if (!raw.locked.empty() && raw.locked.size() != nl) bad("locked: wrong count");
   for (std::size_t i = 0; i < raw.faces.size(); ++i)
     if (raw.faces[i] >= nl) bad("face " + std::to_string(i / 3) + ": corner is not a leaf");
+  // The maps back to the caller's mesh stay inside it (leaves_of_inputs and the commands index by them).
+  for (std::size_t l = 0; l < nl; ++l)
+    if (raw.leaf_to_input[l] >= raw.repair.input_vertices)
+      bad("leaf " + std::to_string(l) + ": input vertex " + std::to_string(raw.leaf_to_input[l]) + " beyond the input's " +
+          std::to_string(raw.repair.input_vertices));
+  for (std::size_t f = 0; f < nf; ++f)
+    if (raw.face_to_input[f] >= raw.repair.input_faces)
+      bad("face " + std::to_string(f) + ": input face " + std::to_string(raw.face_to_input[f]) + " beyond the input's " +
+          std::to_string(raw.repair.input_faces));
   for (std::size_t v = 0; v < nn; ++v) {
     const glm::vec3& p = raw.positions[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) bad("node " + std::to_string(v) + ": position not finite");
@@ -77,6 +88,7 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
       bad(name() + ": cut vertex and face disagree");
     for (Index c : {r.vl_hat, r.vr_hat})
       if (c != kInvalid && c >= nl) bad(name() + ": cut vertex " + std::to_string(c) + " is not a leaf");
+    if (r.vl_hat != kInvalid && r.vl_hat == r.vr_hat) bad(name() + ": both cut vertices are leaf " + std::to_string(r.vl_hat));
     for (Index f : {r.fl_hat, r.fr_hat}) {
       if (f == kInvalid) continue;
       if (f >= nf) bad(name() + ": face " + std::to_string(f) + " out of range");
@@ -89,6 +101,24 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
   }
   for (Index item : raw.ring_items)
     if (item >= nn) bad("stored ring item " + std::to_string(item) + " out of range");
+  // What the schemes rely on to terminate. Hoppe's fn faces are in the mesh just before vs is collapsed: base
+  // faces or faces created by later collapses (a face created by vs itself or earlier sends the forced splits
+  // round in a cycle). Xia-Varshney's stored ring of vs is the 1-ring right after its collapse: nodes before vs
+  // that are collapsed after it, if at all.
+  for (std::size_t i = 0; i < nc; ++i) {
+    const CollapseRecord& r = raw.records[i];
+    const Index vs = static_cast<Index>(nl + i);
+    for (Index f : r.fn)
+      if (f != kInvalid && h.face_creator_[f] != kInvalid && h.face_creator_[f] <= vs)
+        bad("collapse " + std::to_string(i) + " (node " + std::to_string(vs) + "): neighbour face " + std::to_string(f) +
+            " is created by node " + std::to_string(h.face_creator_[f]) + ", not after it");
+    for (Index k = raw.ring_offsets[i]; k < raw.ring_offsets[i + 1]; ++k) {
+      const Index n = raw.ring_items[k];
+      if (n >= vs || (h.parent_[n] != kInvalid && h.parent_[n] <= vs))
+        bad("collapse " + std::to_string(i) + " (node " + std::to_string(vs) + "): stored ring item " + std::to_string(n) +
+            " is not a node of the mesh after that collapse");
+    }
+  }
 
   for (std::size_t v = 0; v < nn; ++v)
     if (h.parent_[v] == kInvalid) h.roots_.push_back(static_cast<Index>(v));
@@ -105,6 +135,7 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
   }
   const int node_bits = max_depth + 1;
   const int tree_bits = h.roots_.size() <= 1 ? 0 : static_cast<int>(std::bit_width(h.roots_.size() - 1));
+  if (max_depth > 62) bad("tree depth " + std::to_string(max_depth) + ": more than 62 levels");
   if (node_bits + tree_bits > 64)
     bad("tree depth " + std::to_string(max_depth) + " with " + std::to_string(h.roots_.size()) + " trees needs " +
         std::to_string(node_bits + tree_bits) + " bits, more than the 64 of a node key");
@@ -135,6 +166,15 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
       bad("face " + std::to_string(f) + (alive ? " survives in the base mesh but is created by a collapse"
                                                : " is not in the base mesh and no collapse creates it"));
     if (alive) h.base_faces_.push_back(static_cast<Index>(f));
+  }
+  // Every root is a vertex of the base mesh (a root without a face has no place in any selectively refined
+  // mesh: SrMesh could not even start).
+  {
+    std::vector<std::uint8_t> has_face(nn, 0);
+    for (Index f : h.base_faces_)
+      for (int k = 0; k < 3; ++k) has_face[root_of[raw.faces[3 * f + k]]] = 1;
+    for (Index r : h.roots_)
+      if (!has_face[r]) bad("root node " + std::to_string(r) + " is a corner of no base face");
   }
 
   h.num_leaves_ = nl;
@@ -221,20 +261,18 @@ void VertexHierarchy::validate() const {
         fail(name() + ": sphere of child " + std::to_string(c) + " is not inside");
       if (!cone_inside(cb.cone, pb.cone)) fail(name() + ": normal cone of child " + std::to_string(c) + " is not inside");
     }
-    // fl^ = (vt-part, vu-part, vl^): one corner under vt, one under vu, the third is vl^.
-    auto check_face = [&](Index f, Index cut) {
+    // fl^ = (vt-part, vu-part, vl^) and fr^ = (vu-part, vt-part, vr^) up to rotation: one corner under each
+    // child, the third the cut vertex, in that cyclic order (the orientation vsplit gives the new faces).
+    auto check_face = [&](Index f, Index cut, Index first, Index second) {
       if (f == kInvalid) return;
       const auto c = face(f);
-      int under_t = 0, under_u = 0, is_cut = 0;
-      for (Index x : c) {
-        under_t += is_ancestor_or_self(r.vt, x);
-        under_u += is_ancestor_or_self(r.vu, x);
-        is_cut += x == cut;
-      }
-      if (under_t != 1 || under_u != 1 || is_cut != 1) fail(name() + ": face " + std::to_string(f) + " is not (vt, vu, cut)");
+      int k = 0;
+      while (k < 3 && c[k] != cut) ++k;
+      if (k == 3 || !is_ancestor_or_self(first, c[(k + 1) % 3]) || !is_ancestor_or_self(second, c[(k + 2) % 3]))
+        fail(name() + ": face " + std::to_string(f) + " is not (" + (first == r.vt ? "vt, vu" : "vu, vt") + ", cut)");
     };
-    check_face(r.fl_hat, r.vl_hat);
-    check_face(r.fr_hat, r.vr_hat);
+    check_face(r.fl_hat, r.vl_hat, r.vt, r.vu);
+    check_face(r.fr_hat, r.vr_hat, r.vu, r.vt);
   }
 }
 

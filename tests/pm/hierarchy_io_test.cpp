@@ -522,6 +522,142 @@ TEST(HierarchyIo, SemanticErrorsBehindAValidChecksum) {
   }
 }
 
+// Records that are each well-formed but do not fit the hierarchy they sit in: the schemes used to loop
+// forever (Hoppe's forced splits on a neighbour face created by the node itself, Xia-Varshney on a stored
+// ring naming a node that is not there), read out of bounds (two equal cut vertices) or build a wrong mesh
+// (fl^ and fr^ swapped with their cut vertices). Found by a review; each edit passed the reader before.
+TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
+  const VertexHierarchy h = build_vertex_hierarchy(make_grid(5, 4));
+  const Bytes good = encode_vertex_hierarchy(h);
+  const Layout at = layout_of(h, good);
+  const std::size_t nl = h.num_leaves(), nc = h.num_collapses();
+  auto record_at = [&](std::size_t i) { return at.records + 40 * i; };
+  // A collapse with both sides (fl^ and fr^).
+  std::size_t both = 0;
+  while (both < nc && (h.record(static_cast<Index>(nl + both)).fl_hat == kInvalid ||
+                       h.record(static_cast<Index>(nl + both)).fr_hat == kInvalid))
+    ++both;
+  ASSERT_LT(both, nc);
+  const CollapseRecord& r = h.record(static_cast<Index>(nl + both));
+  auto rejected = [&](Bytes b, const char* reason) {
+    reseal(b);
+    const IoError e = decode_error(b, nullptr, "edit.vmh");
+    EXPECT_TRUE(contains(e.reason(), "not a valid vertex hierarchy")) << e.what();
+    EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
+  };
+  {
+    Bytes b = good;  // fn[0] := the node's own fl^
+    put_le(b, record_at(both) + 24, r.fl_hat, 4);
+    rejected(b, "not after it");
+  }
+  {
+    Bytes b = good;  // vr^ := vl^
+    put_le(b, record_at(both) + 12, r.vl_hat, 4);
+    rejected(b, "both cut vertices are leaf");
+  }
+  {
+    Bytes b = good;  // (vl^, fl^) and (vr^, fr^) exchanged: every face still holds its cut vertex
+    put_le(b, record_at(both) + 8, r.vr_hat, 4);
+    put_le(b, record_at(both) + 12, r.vl_hat, 4);
+    put_le(b, record_at(both) + 16, r.fr_hat, 4);
+    put_le(b, record_at(both) + 20, r.fl_hat, 4);
+    rejected(b, "is not (vt, vu, cut)");
+  }
+  {
+    Bytes b = good;  // the first stored ring names the last node, which is not in the mesh yet
+    ASSERT_FALSE(h.stored_ring(static_cast<Index>(nl)).empty());
+    put_le(b, at.ring_items, h.num_nodes() - 1, 4);
+    rejected(b, "is not a node of the mesh after that collapse");
+  }
+  {
+    Bytes b = good;  // leaf_to_input far beyond the input: leaves_of_inputs used to allocate by it
+    put_le(b, at.leaf_to_input, 0xFFFFFFFEu, 4);
+    rejected(b, "beyond the input's");
+  }
+}
+
+namespace {
+ElementBound bound_at(glm::vec3 c, float r, float e) {
+  ElementBound b;
+  b.center = c;
+  b.radius = r;
+  b.error = e;
+  return b;  // full normal cone
+}
+std::string finish_error(const VertexHierarchyBuilder::Raw& raw) {
+  try {
+    VertexHierarchyBuilder::finish(raw);
+  } catch (const InvalidInput& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+}  // namespace
+
+// VertexHierarchyBuilder::finish is public: what the reader relies on is checked there, not in the reader.
+TEST(HierarchyBuilder, RejectsWhatNoAnalysisBuilds) {
+  {
+    // Three leaves, one collapse (0, 1) whose face dies: leaf 2 stays a root with no base face.
+    VertexHierarchyBuilder::Raw raw;
+    raw.num_leaves = 3;
+    raw.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5f, 0, 0}};
+    raw.bounds = {bound_at({0, 0, 0}, 0, 0), bound_at({1, 0, 0}, 0, 0), bound_at({0, 1, 0}, 0, 0), bound_at({0.5f, 0, 0}, 0.5f, 0.1f)};
+    CollapseRecord r;
+    r.vt = 0, r.vu = 1, r.vl_hat = 2, r.fl_hat = 0;
+    raw.records = {r};
+    raw.faces = {0, 1, 2};
+    raw.ring_offsets = {0, 1};
+    raw.ring_items = {2};
+    raw.leaf_to_input = {0, 1, 2};
+    raw.face_to_input = {0};
+    raw.repair.input_vertices = 3, raw.repair.input_faces = 1;
+    EXPECT_TRUE(contains(finish_error(raw), "root node 2 is a corner of no base face")) << finish_error(raw);
+    raw.ring_offsets = {1, 0};  // decreasing (and not starting at 0)
+    EXPECT_TRUE(contains(finish_error(raw), "offsets")) << finish_error(raw);
+  }
+  {
+    // A chain of 64 leaves collapsed one after another: depth 63, one tree. Keys would need shifts by 64.
+    const Index L = 64, C = 63;
+    VertexHierarchyBuilder::Raw raw;
+    raw.num_leaves = L;
+    for (Index i = 0; i < L + C; ++i) {
+      raw.positions.push_back({0, 0, 0});
+      raw.bounds.push_back(bound_at({0, 0, 0}, 0, static_cast<float>(i >= L ? i - L + 1 : 0)));
+    }
+    for (Index i = 0; i < C; ++i) {
+      CollapseRecord r;
+      r.vt = i == 0 ? 0 : L + i - 1, r.vu = i + 1, r.vl_hat = 0, r.fl_hat = i;
+      raw.records.push_back(r);
+      raw.faces.insert(raw.faces.end(), {0, i + 1, (i + 2) % L});
+      raw.face_to_input.push_back(i);
+    }
+    raw.ring_offsets.assign(C + 1, 0);
+    for (Index i = 0; i < L; ++i) raw.leaf_to_input.push_back(i);
+    raw.repair.input_vertices = L, raw.repair.input_faces = C;
+    EXPECT_TRUE(contains(finish_error(raw), "more than 62 levels")) << finish_error(raw);
+  }
+}
+
+// refine() hands the query's sink to the splits it forces; an exception (a leaf asked for) used to leave the
+// sink pointing into the caller's dead frame, and the next vsplit called it (AddressSanitizer:
+// stack-use-after-scope). An id out of range was read unchecked.
+TEST(SrMeshApi, RefineChecksItsNodeAndForgetsTheSinkOnAnError) {
+  const VertexHierarchy h = build_vertex_hierarchy(make_grid(6, 5));
+  SrMesh sr(h);
+  {
+    std::size_t calls = 0;
+    auto sink = [&calls](Index) { ++calls; };
+    EXPECT_THROW(sr.refine(0, sink), InvalidInput);  // a leaf
+    EXPECT_THROW(sr.refine(static_cast<Index>(h.num_nodes()), sink), InvalidInput);
+    EXPECT_EQ(calls, 0u);
+  }
+  // Splits after the failed call: the old sink is gone, and nothing may call it.
+  for (Index v : h.roots()) {
+    if (!h.is_leaf(v)) EXPECT_TRUE(sr.vsplit(v));
+  }
+  sr.validate();
+}
+
 TEST(HierarchyIo, EncodingAnEmptyHierarchyThrows) {
   EXPECT_THROW(encode_vertex_hierarchy(VertexHierarchy{}), InvalidInput);
 }
