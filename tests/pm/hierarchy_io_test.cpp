@@ -653,7 +653,8 @@ TEST(SrMeshApi, RefineChecksItsNodeAndForgetsTheSinkOnAnError) {
   }
   // Splits after the failed call: the old sink is gone, and nothing may call it.
   for (Index v : h.roots()) {
-    if (!h.is_leaf(v)) EXPECT_TRUE(sr.vsplit(v));
+    if (h.is_leaf(v)) continue;
+    EXPECT_TRUE(sr.vsplit(v));
   }
   sr.validate();
 }
