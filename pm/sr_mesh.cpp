@@ -490,7 +490,9 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
     if ((has_l && vl == kInvalid) || (has_r && vr == kInvalid))
       throw std::logic_error("SrMesh: no cut vertex of node " + std::to_string(vs) + " in its 1-ring");
     if (vl != kInvalid && vl == vr) {
-      // Section 4.4: both cut vertices are one active vertex; split it first.
+      // Section 4.4: both cut vertices are one active vertex; split it first. A leaf cannot be split: the
+      // records would be inconsistent (the reader rejects such files; this guards the arrays).
+      if (h_->is_leaf(vl)) throw std::logic_error("SrMesh: both cut vertices of node " + std::to_string(vs) + " are leaf " + std::to_string(vl));
       ++stats_.degenerate_cases;
       vsplit_kim_lee(vl);
       continue;
