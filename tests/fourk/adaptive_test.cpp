@@ -183,6 +183,25 @@ double max_torus_distance(const Mt& mt, std::span<const FaceId> faces, int order
 // Slack for float positions.
 double slack(float tolerance) { return 1e-4 * tolerance + 2e-6; }
 
+// Largest distance from the sphere of `radius` about the origin at the sample points of `faces`.
+double max_sphere_distance(const Mt& mt, std::span<const FaceId> faces, double radius) {
+  double worst = 0.0;
+  for (const FaceId f : faces)
+    for (const auto& b : sample_points(4)) worst = std::max(worst, std::abs(glm::length(flat_point(mt, f, b)) - radius));
+  return worst;
+}
+
+// The finest front of an implicit sphere's hierarchy is a valid closed sphere within `tol` of it.
+void expect_closed_sphere(const AdaptiveHierarchy& h, double radius, float tol) {
+  ASSERT_NO_THROW(h.mt.validate());
+  const TriMesh m = finest_front(h.mt).to_mesh();
+  std::vector<std::array<Index, 2>> border;
+  ASSERT_TRUE(conforming(m, &border));
+  EXPECT_TRUE(border.empty());
+  EXPECT_EQ(euler_characteristic(m), 2);
+  EXPECT_LE(max_sphere_distance(h.mt, adaptive_finest_faces(h), radius), tol + slack(tol));
+}
+
 TEST(AdaptiveParametric, TorusMeetsToleranceAndClosesUp) {
   const ParametricSurface torus = torus_parametric(static_cast<float>(kTorusR));
   const float tol = kParametricTorusTolerance;
@@ -517,20 +536,8 @@ TEST(AdaptiveImplicit, SphereAndCallerBaseWithAnUnpairedFace) {
   sphere.box_hi = glm::dvec3(1.3);
   sphere.cells = {3, 3, 3};
   const float tol = 0.005f;
-  const auto closed = build_adaptive_implicit(sphere, with_tolerance(tol));
-  ASSERT_NO_THROW(closed.mt.validate());
-  const TriMesh mc = finest_front(closed.mt).to_mesh();
+  expect_closed_sphere(build_adaptive_implicit(sphere, with_tolerance(tol)), 1.0, tol);
   std::vector<std::array<Index, 2>> border;
-  ASSERT_TRUE(conforming(mc, &border));
-  EXPECT_TRUE(border.empty());
-  EXPECT_EQ(euler_characteristic(mc), 2);
-  auto sphere_error = [](const Mt& mt, std::span<const FaceId> faces) {
-    double worst = 0.0;
-    for (const FaceId f : faces)
-      for (const auto& b : sample_points(4)) worst = std::max(worst, std::abs(glm::length(flat_point(mt, f, b)) - 1.0));
-    return worst;
-  };
-  EXPECT_LE(sphere_error(closed.mt, adaptive_finest_faces(closed)), tol + slack(tol));
 
   // A small central face t = (A, B, C), a neighbour n_i on each of its edges and an ear e_i on each n_i. The
   // longest shared edges pair n_i with e_i, and no augmenting path reaches t: t stays unpaired with no
@@ -559,7 +566,7 @@ TEST(AdaptiveImplicit, SphereAndCallerBaseWithAnUnpairedFace) {
   EXPECT_EQ(border_components(border), 1u);  // a T-junction would add a border loop inside
   EXPECT_EQ(euler_characteristic(mo), 1);
   EXPECT_GT(open.max_level, 4);
-  EXPECT_LE(sphere_error(open.mt, fo.faces()), 0.002 + slack(0.002f));
+  EXPECT_LE(max_sphere_distance(open.mt, fo.faces(), 1.0), 0.002 + slack(0.002f));
   for (const auto& p : mo.positions) EXPECT_NEAR(glm::length(glm::dvec3(p)), 1.0, 1e-6);
 }
 
@@ -583,16 +590,7 @@ TEST(AdaptiveImplicit, SurfacesThroughGridVerticesUpToRounding) {
       const float tol = 0.002f;
       AdaptiveHierarchy h;
       ASSERT_NO_THROW(h = build_adaptive_implicit(sphere, with_tolerance(tol)));
-      ASSERT_NO_THROW(h.mt.validate());
-      const TriMesh m = finest_front(h.mt).to_mesh();
-      std::vector<std::array<Index, 2>> border;
-      ASSERT_TRUE(conforming(m, &border));
-      EXPECT_TRUE(border.empty());
-      EXPECT_EQ(euler_characteristic(m), 2);
-      double worst = 0.0;
-      for (const FaceId f : adaptive_finest_faces(h))
-        for (const auto& b : sample_points(4)) worst = std::max(worst, std::abs(glm::length(flat_point(h.mt, f, b)) - r));
-      EXPECT_LE(worst, tol + slack(tol));
+      expect_closed_sphere(h, r, tol);
     }
   for (const double x0 : {1e-9, 1e-12}) {
     SCOPED_TRACE("plane x = " + std::to_string(x0));
