@@ -40,6 +40,11 @@ bool is_mesh_file(const std::string& path);
 void require_mesh_output(const std::string& path, const char* command, const char* option = "-o");
 void require_png(const std::string& path, const char* command, const char* option = "--png");
 
+/// Validators for CLI11's Option::check: "" when `text` is a number >= 0 (resp. > 0), else a message. NaN
+/// passes both: the commands reject it themselves, naming the option.
+std::string check_non_negative(const std::string& text);
+std::string check_positive(const std::string& text);
+
 /// `--raw-size W,H` (two positive integers) into `options`; nothing when `text` is empty. Throws
 /// InvalidInput naming the option otherwise.
 void apply_raw_size(const std::string& text, HeightFieldReadOptions& options);

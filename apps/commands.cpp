@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -103,6 +104,20 @@ void require_png(const std::string& path, const char* command, const char* optio
   if (!path.empty() && lower_extension(path) != ".png")
     throw InvalidInput(std::string(command) + ": " + option + " must end in .png, not '" + path + "'");
 }
+
+namespace {
+std::string check_sign(const std::string& text, bool zero_ok) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
+  if (std::isnan(v)) return "";
+  if (zero_ok ? v < 0.0 : !(v > 0.0)) return std::string("must be ") + (zero_ok ? ">= 0" : "> 0") + ", not " + text;
+  return "";
+}
+}  // namespace
+
+std::string check_non_negative(const std::string& text) { return check_sign(text, true); }
+std::string check_positive(const std::string& text) { return check_sign(text, false); }
 
 void apply_raw_size(const std::string& text, HeightFieldReadOptions& options) {
   if (text.empty()) return;
@@ -283,10 +298,10 @@ int run(int argc, char** argv) {
   auto* terrain = app.add_subcommand("terrain", "Build the 4-8 hierarchy of a height field and extract an adapted mesh");
   terrain->add_option("HEIGHTFIELD", ta.input, "height field: .pgm, .png, .raw/.f32 (float32 LE, give --raw-size)")->required();
   terrain->add_option("-o,--output", ta.output, "output mesh (.obj, .ply, .off)")->required();
-  terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample");
+  terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample")->check(CLI::NonNegativeNumber);
   terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)");
-  terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)");
-  terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)");
+  terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive);
+  terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive);
   terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)")->check(CLI::NonNegativeNumber);
   terrain->add_option("--z-scale", ta.z_scale, "multiply heights by this factor");
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");
@@ -313,8 +328,8 @@ int run(int argc, char** argv) {
   auto* demo = app.add_subcommand("demo", "Fractal terrain: build, uniform-error and view-dependent meshes, table, OBJ + PNG");
   demo->add_option("--out", da.out_dir, "output folder (default varmesh_demo)");
   demo->add_option("--size", da.size, "terrain size in samples per side (default 1025)")->check(CLI::Range(17, 8193));
-  demo->add_option("--error", da.error, "uniform mesh: max vertical error (default 0.5% of the height range)");
-  demo->add_option("--pixels", da.pixels, "view-dependent mesh: screen-space error in pixels (default 1)");
+  demo->add_option("--error", da.error, "uniform mesh: max vertical error (default 0.5% of the height range)")->check(check_non_negative);
+  demo->add_option("--pixels", da.pixels, "view-dependent mesh: screen-space error in pixels (default 1)")->check(check_positive);
   demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain");
   demo->add_flag("--quiet", da.quiet, "no progress on stderr");
 
@@ -345,7 +360,12 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version print and succeed; every other parse error is one line and status 1, like the
+    // errors of the commands themselves (CLI11's own exit codes 100+ and its "Run with --help" line are
+    // not what the README promises).
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "varmesh: error: %s (see --help)\n", e.what());
+    return 1;
   }
   try {
     if (*info) return cmd_info(info_path);

@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <string>
+#include <unordered_map>
 
 #include <CLI/CLI.hpp>
 #include <glm/common.hpp>
@@ -107,15 +109,22 @@ auto about(const std::string& what, Fn&& fn) {
 // the fans up to quads: a triangle (a, x, y) right after a triangle (a, w, x) (y not in it) makes the quad
 // (a, w, x, y). So a file of quads (and triangles) comes back exactly, except that two of its own triangles
 // in that pattern become a quad (as pairing would make); a k-gon, k > 4, comes back as quads and at most
-// one triangle. Merging two triangles across their shared edge keeps the mesh a valid polygon mesh.
+// one triangle. Merging two triangles across their shared edge keeps the mesh a valid polygon mesh, and the
+// merge is made only when no other face uses that edge: merging would hide a non-manifold edge from
+// validate() (a file with four faces on one edge passed when it also held a quad).
 PolyMesh quads_from_fans(const TriMesh& t) {
   PolyMesh p;
   p.positions.reserve(t.num_vertices());
   for (const glm::vec3& v : t.positions) p.positions.emplace_back(v);
+  std::unordered_map<std::uint64_t, std::uint32_t> uses;  // undirected edge -> faces on it
+  auto key = [](Index u, Index v) { return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v); };
+  for (std::size_t f = 0; f < t.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) ++uses[key(t.corner(f, k), t.corner(f, (k + 1) % 3))];
   std::vector<Index> poly;
   for (std::size_t f = 0; f < t.num_faces(); ++f) {
     const Index a = t.corner(f, 0), x = t.corner(f, 1), y = t.corner(f, 2);
-    if (poly.size() == 3 && poly[0] == a && poly[2] == x && y != poly[0] && y != poly[1] && y != poly[2]) {
+    if (poly.size() == 3 && poly[0] == a && poly[2] == x && y != poly[0] && y != poly[1] && y != poly[2] &&
+        uses[key(a, x)] == 2) {
       poly.push_back(y);
       continue;
     }
@@ -188,13 +197,12 @@ PolyMesh base_for(const Input& in, Scheme s, std::string* description) {
 }
 
 int steps_for(const SchemeInfo& s, const SubdivArgs& a) {
-  if (a.levels != SubdivArgs::kUnsetCount && a.steps != SubdivArgs::kUnsetCount)
-    throw InvalidInput("subdiv: give --levels or --steps, not both");
-  if (a.steps != SubdivArgs::kUnsetCount) {
+  if (a.levels_given && a.steps_given) throw InvalidInput("subdiv: give --levels or --steps, not both");
+  if (a.steps_given) {
     if (a.steps < 0) throw InvalidInput("subdiv: --steps must be >= 0 (got " + std::to_string(a.steps) + ")");
     return a.steps;
   }
-  if (a.levels == SubdivArgs::kUnsetCount) throw InvalidInput("subdiv: give --levels N (or --steps S)");
+  if (!a.levels_given) throw InvalidInput("subdiv: give --levels N (or --steps S)");
   if (a.levels < 0) throw InvalidInput("subdiv: --levels must be >= 0 (got " + std::to_string(a.levels) + ")");
   if (a.levels > 64) throw InvalidInput("subdiv: --levels " + std::to_string(a.levels) + " is absurd (every mesh exceeds 2^31 triangles by level 16)");
   return a.levels * s.steps_per_level;
@@ -436,14 +444,17 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
                  "file it equals 48, on a polygon file or cube/torus it re-pairs their triangulation");
   sub.add_option("--levels", a.levels,
                  "dyadic levels (faces x4 each): 2 binary 4-8 steps (48, catmull-clark, linear, quasi48), "
-                 "2 Zwart-Powell steps, 1 Doo-Sabin step");
-  sub.add_option("--steps", a.steps, "elementary steps instead: binary 4-8 steps (odd allowed), Zwart-Powell or Doo-Sabin steps");
+                 "2 Zwart-Powell steps, 1 Doo-Sabin step")
+      ->each([&a](const std::string&) { a.levels_given = true; });
+  sub.add_option("--steps", a.steps, "elementary steps instead: binary 4-8 steps (odd allowed), Zwart-Powell or Doo-Sabin steps")
+      ->each([&a](const std::string&) { a.steps_given = true; });
   sub.add_flag("--adaptive", a.adaptive,
                "build the Multi-Triangulation of the binary steps and extract a front (primal schemes)");
-  sub.add_option("--error", a.error, "with --adaptive: largest node error (object units; 0 = refine wherever anything moves)");
+  sub.add_option("--error", a.error, "with --adaptive: largest node error (object units; 0 = refine wherever anything moves)")
+      ->check(check_non_negative);
   sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)");
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)");
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive);
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive);
   sub.add_option("--png", a.png, "also render the result to this PNG (flat shading, polygon edges)");
   sub.add_option("--figure", a.figure,
                  "write every scheme on INPUT into this folder (one PNG each, same camera, plus a grid): "
@@ -458,6 +469,8 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
 int run_subdiv(const SubdivArgs& a) {
   check_limits(a);
   if (!a.adaptive && (!(a.error < 0.0f) || !a.camera.empty())) throw InvalidInput("subdiv: --error and --camera need --adaptive");
+  if ((!a.view.empty() || !a.up.empty()) && a.png.empty() && a.figure.empty())
+    throw InvalidInput("subdiv: --view and --up place the pictures' camera: give --png or --figure");
   if (!a.figure.empty()) return run_figure(a);
   check_output_paths(a);
   const SchemeInfo& s = parse_scheme(a.scheme);
@@ -477,7 +490,7 @@ int run_subdiv(const SubdivArgs& a) {
     check_size(primal_size(base, steps), s, steps, a.max_triangles, true);
     SubdivMtInfo info;
     Stopwatch build_watch;
-    const Mt mt = build_subdivision_mt(base, primal(s.scheme), steps, &info);
+    const Mt mt = about(in.name, [&] { return build_subdivision_mt(base, primal(s.scheme), steps, &info); });
     const double build_ms = build_watch.ms();
     Query q;
     q.criterion = *criterion;

@@ -14,10 +14,11 @@ struct SubdivArgs {
   std::string input;   ///< mesh file (.obj/.off/.ply) or a built-in quad mesh: cube | torus
   std::string output;  ///< .obj/.off/.ply (not with --figure)
   std::string scheme;  ///< 48 | zwart-powell | catmull-clark | doo-sabin | quasi48 | linear (empty: 48)
-  int levels;          ///< dyadic levels (faces x4 each); unset: kUnsetCount
-  int steps;           ///< the scheme's elementary steps (binary 4-8 steps, Zwart-Powell or Doo-Sabin steps)
+  int levels = 0;      ///< dyadic levels (faces x4 each), when levels_given
+  int steps = 0;       ///< the scheme's elementary steps (binary 4-8 steps, Zwart-Powell or Doo-Sabin steps), when steps_given
+  bool levels_given = false, steps_given = false;  ///< set by the parser: no value of the option means "not given"
   bool adaptive = false;
-  float error = -1.0f;  ///< --adaptive: largest node error (object units); < 0: not given
+  float error = -1.0f;  ///< --adaptive: largest node error (object units); < 0: not given (the parser takes >= 0 only)
   std::string camera;   ///< --adaptive: ex,ey,ez,tx,ty,tz,fov
   float pixels = 1.0f, viewport = 1080.0f;
   std::string png;     ///< render the result to this PNG
@@ -26,10 +27,9 @@ struct SubdivArgs {
   std::string up;      ///< pictures: the up axis (default 0,0,1)
   std::uint64_t max_triangles;  ///< refuse results with more triangles than this (checked before running)
 
-  static constexpr int kUnsetCount = -2147483647 - 1;
   static constexpr std::uint64_t kDefaultMaxTriangles = std::uint64_t{1} << 25;
   static constexpr std::uint64_t kHardMaxTriangles = std::uint64_t{1} << 31;
-  SubdivArgs() : levels(kUnsetCount), steps(kUnsetCount), max_triangles(kDefaultMaxTriangles) {}
+  SubdivArgs() : max_triangles(kDefaultMaxTriangles) {}
 };
 
 void add_subdiv_options(CLI::App& sub, SubdivArgs& args);

@@ -1,5 +1,7 @@
 #include "fourk/poly_mesh.hpp"
 
+#include <algorithm>
+
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -39,7 +41,11 @@ void PolyMesh::validate() const {
     const glm::dvec3& p = positions[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       throw InvalidInput("polygon mesh: vertex " + std::to_string(v) + " has a non-finite coordinate", v);
+    // The schemes sum a face's or a ring's points before they divide: past 1e300 the sums overflow.
+    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > 1e300)
+      throw InvalidInput("polygon mesh: vertex " + std::to_string(v) + " has a coordinate beyond 1e300 in size", v);
   }
+  std::vector<Index> used_by(nv, kInvalid);  // the face that last used each vertex: repeated corners in O(k)
   // Directed edge -> corner slot (the corner where the edge starts).
   std::unordered_map<std::uint64_t, Index> directed;
   directed.reserve(corners.size() * 2);
@@ -55,10 +61,9 @@ void PolyMesh::validate() const {
         throw InvalidInput("polygon mesh: face " + std::to_string(f) + " uses vertex " + std::to_string(fc[i]) +
                                " out of range (" + std::to_string(nv) + " vertices)",
                            f);
-      for (std::size_t j = 0; j < i; ++j)
-        if (fc[j] == fc[i])
-          throw InvalidInput("polygon mesh: face " + std::to_string(f) + " repeats vertex " + std::to_string(fc[i]),
-                             f);
+      if (used_by[fc[i]] == f)
+        throw InvalidInput("polygon mesh: face " + std::to_string(f) + " repeats vertex " + std::to_string(fc[i]), f);
+      used_by[fc[i]] = static_cast<Index>(f);
     }
     for (std::size_t i = 0; i < k; ++i) {
       const Index a = fc[i], b = fc[(i + 1) % k];

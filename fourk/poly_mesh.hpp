@@ -37,7 +37,8 @@ struct PolyMesh {
   bool all_quads() const noexcept;
 
   /// Throws InvalidInput naming the first offending element: no face, offsets malformed, a face with
-  /// fewer than 3 corners or a repeated corner, a corner out of range, a non-finite position, a directed
+  /// fewer than 3 corners or a repeated corner, a corner out of range, a non-finite position or one beyond
+  /// 1e300 in size (the schemes' sums would overflow), a directed
   /// edge used twice (non-manifold edge or inconsistent orientation), a vertex whose faces form several
   /// fans (non-manifold vertex). Unreferenced vertices are allowed.
   void validate() const;

@@ -12,10 +12,13 @@
 #include "fourk/subdiv.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <unordered_map>
+
+#include <unistd.h>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -61,6 +64,11 @@ SubdivTopology make_subdiv_topology(const PolyMesh& mesh) {
   std::vector<std::uint8_t> uses;
   for (std::size_t f = 0; f < t.num_faces; ++f) {
     const Index off = mesh.face_offsets[f], k = static_cast<Index>(mesh.face_size(f));
+    // A face's centre becomes a vertex of valence k at the first step; valences are 16-bit.
+    if (k > std::numeric_limits<std::uint16_t>::max())
+      throw InvalidInput("subdivision: face " + std::to_string(f) + " has " + std::to_string(k) +
+                             " corners (at most 65535 supported)",
+                         f);
     for (Index i = 0; i < k; ++i) {
       const Index a = mesh.corners[off + i], b = mesh.corners[off + (i + 1) % k];
       const std::uint64_t key = (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
@@ -501,10 +509,16 @@ void StencilTable::apply(std::span<const double> in, std::span<double> out, int 
   if (out.size() != num_outputs() * nc)
     throw InvalidInput("StencilTable::apply: output has " + std::to_string(out.size()) + " values, expected " +
                        std::to_string(num_outputs() * nc));
+  check_shape("StencilTable::apply");
   for (std::size_t i = 0; i < num_outputs(); ++i) {
     double* o = out.data() + i * nc;
     std::fill(o, o + nc, 0.0);
+    if (offsets[i + 1] < offsets[i]) throw InvalidInput("StencilTable::apply: offsets decrease at stencil " + std::to_string(i), i);
     for (Index j = offsets[i]; j < offsets[i + 1]; ++j) {
+      if (sources[j] >= num_inputs)
+        throw InvalidInput("StencilTable::apply: stencil " + std::to_string(i) + " reads input " + std::to_string(sources[j]) +
+                               " of " + std::to_string(num_inputs),
+                           i);
       const double* s = in.data() + std::size_t{sources[j]} * nc;
       const double w = weights[j];
       for (std::size_t c = 0; c < nc; ++c) o[c] += w * s[c];
@@ -518,7 +532,28 @@ std::vector<double> StencilTable::apply(std::span<const double> in, int componen
   return out;
 }
 
+void StencilTable::check_shape(const char* who) const {
+  if (offsets.empty() || offsets.front() != 0 || offsets.back() != sources.size() || sources.size() != weights.size())
+    throw InvalidInput(std::string(who) + ": offsets, sources and weights do not match (" + std::to_string(offsets.size()) +
+                       " offsets ending at " + (offsets.empty() ? std::string("-") : std::to_string(offsets.back())) + ", " +
+                       std::to_string(sources.size()) + " sources, " + std::to_string(weights.size()) + " weights)");
+}
+
+void StencilTable::check_entries(const char* who) const {
+  check_shape(who);
+  for (std::size_t i = 0; i < num_outputs(); ++i) {
+    if (offsets[i + 1] < offsets[i]) throw InvalidInput(std::string(who) + ": offsets decrease at stencil " + std::to_string(i), i);
+    for (Index j = offsets[i]; j < offsets[i + 1]; ++j)
+      if (sources[j] >= num_inputs)
+        throw InvalidInput(std::string(who) + ": stencil " + std::to_string(i) + " reads input " + std::to_string(sources[j]) +
+                               " of " + std::to_string(num_inputs),
+                           i);
+  }
+}
+
 StencilTable StencilTable::after(const StencilTable& first) const {
+  check_entries("StencilTable::after");
+  first.check_entries("StencilTable::after (first table)");
   if (first.num_outputs() != num_inputs)
     throw InvalidInput("StencilTable::after: the first table has " + std::to_string(first.num_outputs()) +
                        " outputs, this one takes " + std::to_string(num_inputs) + " inputs");
@@ -555,6 +590,16 @@ StencilTable StencilTable::after(const StencilTable& first) const {
 
 namespace {
 
+// Physical memory in bytes, or 0 when unknown.
+double physical_memory_bytes() noexcept {
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  return pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
+#else
+  return 0.0;
+#endif
+}
+
 // Throws when `steps` is negative or too large; returns the number of positions after `steps` steps.
 std::size_t check_steps(const SubdivTopology& t, int steps) {
   if (steps < 0) throw InvalidInput("subdivision: steps must be >= 0 (got " + std::to_string(steps) + ")");
@@ -568,6 +613,16 @@ std::size_t check_steps(const SubdivTopology& t, int steps) {
   }
   if (c.v + c.f >= kIndexLimit)
     throw InvalidInput("subdivision: " + std::to_string(steps) + " steps would make 2^32 vertices or more (steps)",
+                       static_cast<std::uint64_t>(steps));
+  // Memory at the last level (positions 24 bytes, corners 2 x 4, edges 9, vertices 3, and as much again for
+  // the level it is computed from, at worst): refused up front when it exceeds the machine's memory, rather
+  // than ending in bad_alloc or the out-of-memory killer half-way through.
+  const double bytes = 2.0 * (27.0 * double(c.v + c.f) + 8.0 * double(4 * c.c) + 9.0 * double(2 * c.e + c.c));
+  const double ram = physical_memory_bytes();
+  if (ram > 0.0 && bytes > ram)
+    throw InvalidInput("subdivision: " + std::to_string(steps) + " steps would need about " +
+                           std::to_string(static_cast<long long>(bytes / 1e9)) + " GB, more than the " +
+                           std::to_string(static_cast<long long>(ram / 1e9)) + " GB of memory here (steps)",
                        static_cast<std::uint64_t>(steps));
   return static_cast<std::size_t>(steps % 2 ? c.v + c.f : c.v);
 }
@@ -726,10 +781,29 @@ Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, Su
   SubdivTopology t = make_subdiv_topology(base);
   // Triangles of the current even level: per face, its fan (c0, c_i, c_{i+1}) ids from tri_offset[f].
   std::vector<Index> tri_ids, tri_offset(t.num_faces + 1, 0);
+  // Two faces whose fans share a triangle (two triangles on one vertex triple, a "pillow") are a valid
+  // polygon mesh that subdivide() takes, but the Mt cannot hold the same triangle twice: name the faces.
+  struct TriangleHash {
+    std::size_t operator()(const std::array<Index, 3>& c) const noexcept {
+      return std::hash<std::uint64_t>{}((std::uint64_t{c[0]} << 32 | c[1]) * 0x9E3779B97F4A7C15ull ^ c[2]);
+    }
+  };
+  std::unordered_map<std::array<Index, 3>, Index, TriangleHash> fan_owner;  // sorted corners -> face
+  fan_owner.reserve(t.face_verts.size());
   for (Index f = 0; f < t.num_faces; ++f) {
     const Index off = t.offset(f), k = t.face_size(f);
-    for (Index i = 1; i + 1 < k; ++i)
-      tri_ids.push_back(b.add_face(t.face_verts[off], t.face_verts[off + i], t.face_verts[off + i + 1]));
+    for (Index i = 1; i + 1 < k; ++i) {
+      const std::array<Index, 3> c{t.face_verts[off], t.face_verts[off + i], t.face_verts[off + i + 1]};
+      std::array<Index, 3> sorted = c;
+      std::sort(sorted.begin(), sorted.end());
+      if (const auto [it, inserted] = fan_owner.emplace(sorted, f); !inserted)
+        throw InvalidInput("build_subdivision_mt: faces " + std::to_string(it->second) + " and " + std::to_string(f) +
+                               " both hold the triangle (" + std::to_string(sorted[0]) + ", " + std::to_string(sorted[1]) +
+                               ", " + std::to_string(sorted[2]) +
+                               ") in their fans (two faces on one set of corners?): a hierarchy cannot hold it twice",
+                           f);
+      tri_ids.push_back(b.add_face(c[0], c[1], c[2]));
+    }
     tri_offset[f + 1] = static_cast<Index>(tri_ids.size());
   }
   b.set_base(tri_ids);

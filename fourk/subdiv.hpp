@@ -117,11 +117,17 @@ struct StencilTable {
 
   std::size_t num_outputs() const noexcept { return offsets.size() - 1; }
   /// Applies the table to a per-vertex attribute of `components` doubles per vertex (positions: 3,
-  /// colours: 3, texture coordinates: 2, ...). Throws InvalidInput when the sizes do not match.
+  /// colours: 3, texture coordinates: 2, ...). Throws InvalidInput when the sizes do not match or the table
+  /// is malformed (see check_entries).
   void apply(std::span<const double> in, std::span<double> out, int components) const;
   std::vector<double> apply(std::span<const double> in, int components) const;
   /// Composition: (this o first), i.e. apply `first`, then this. Entries with the same source are merged.
   StencilTable after(const StencilTable& first) const;
+  /// Both throw InvalidInput naming the stencil when the fields (public, so anything can be in them) do not
+  /// form a table: offsets not starting at 0, decreasing or not ending at the source count, a source count
+  /// other than the weight count; check_entries() also a source >= num_inputs. apply() and after() check.
+  void check_shape(const char* who) const;
+  void check_entries(const char* who) const;
 };
 
 /// The same rules as the step functions, as tables (stencil i = output vertex i).

@@ -37,10 +37,18 @@ TEST(Cli, HelpOnEverySubcommand) {
   }
 }
 
-TEST(Cli, UnknownOptionFails) {
+// Errors of the command line itself keep the promise of the commands' errors: status 1 and one line (they
+// used to exit with CLI11's codes 104-109 and a second "Run with --help" line).
+TEST(Cli, CommandLineErrorsAreOneLineAndStatusOne) {
   const auto dir = testing::scratch_dir("cli_unknown");
-  const CmdResult r = run("terrain --no-such-option x", dir);
-  EXPECT_NE(r.status, 0);
+  for (const char* args : {"terrain --no-such-option x", "subdiv cube --levels abc -o x.obj", "subdiv -o x.obj",
+                           "subdiv cube --steps 99999999999 -o x.obj", "no-such-command", ""}) {
+    const CmdResult r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("varmesh: error:"), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(dir / "x.obj")) << args;
+  }
 }
 
 TEST(Cli, InfoReportsCountsAndMissingFileIsOneLine) {

@@ -211,6 +211,14 @@ TEST(SubdivCli, BadInputFailsWithOneLineAndNoOutput) {
   std::ofstream((dir / "bowtie.obj").string()) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 0\nv 0 -1 0\nf 1 2 3\nf 1 4 5\n";
   std::ofstream((dir / "fin.obj").string()) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n";
   std::ofstream((dir / "trunc.off").string()) << "OFF\n4 2 0\n0 0 0\n1 0 0\n";
+  // Four faces on edge 1-3, and an unrelated quad (which makes the reader's polygon path rebuild quads from
+  // the fans: merging (1 2 3) with (1 3 4) used to hide the edge from the manifold check).
+  std::ofstream((dir / "nm_quad.obj").string()) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 2 0\nv 5 0 0\nv 6 0 0\nv 6 1 0\n"
+                                                   "v 5 1 0\nf 1 2 3\nf 1 3 4\nf 2 1 3\nf 3 1 5\nf 6 7 8 9\n";
+  // Two triangles on one vertex triple (a closed pillow) and a quad: subdivided uniformly, but the adaptive
+  // hierarchy cannot hold the triangle twice (it failed with the Mt builder's words, naming no file).
+  std::ofstream((dir / "pillow.obj").string()) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 0 0\nv 6 0 0\nv 6 1 0\nv 5 1 0\n"
+                                                  "f 1 2 3\nf 3 2 1\nf 4 5 6 7\n";
   const std::string out = (dir / "out.obj").string();
   struct Case {
     std::string args, says;
@@ -240,6 +248,13 @@ TEST(SubdivCli, BadInputFailsWithOneLineAndNoOutput) {
       {"cube --scheme doo-sabin --levels 1 --adaptive --error 0.1 -o " + out, "primal"},
       {"cube --levels 1 --max-triangles 0 -o " + out, "--max-triangles"},
       {"cube --levels 1 --figure " + (dir / "fig").string() + " -o " + out, "--figure"},
+      {(dir / "nm_quad.obj").string() + " --levels 1 -o " + out, "non-manifold edge"},
+      {(dir / "pillow.obj").string() + " --levels 1 --adaptive --error 0 -o " + out, "pillow: build_subdivision_mt: faces 0 and 1"},
+      {"cube --levels 1 --view 1,1,1 -o " + out, "give --png or --figure"},
+      {"cube --levels 1 --error -0.5 -o " + out, "--error: must be >= 0"},
+      {"cube --levels 1 --adaptive --camera 3,3,3,0,0,0,40 --pixels -1 -o " + out, "--pixels: must be > 0"},
+      {"cube --steps -2147483648 -o " + out, "--steps must be >= 0"},
+      {"cube --levels 2 --steps -2147483648 -o " + out, "not both"},
   };
   for (const Case& c : cases) {
     const CmdResult r = run(c.args, dir);
@@ -253,8 +268,8 @@ TEST(SubdivCli, BadInputFailsWithOneLineAndNoOutput) {
   // Nothing else was left behind (temporary files included).
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
-    EXPECT_TRUE(name == "bowtie.obj" || name == "fin.obj" || name == "trunc.off" || name == "stdout.txt" ||
-                name == "stderr.txt")
+    EXPECT_TRUE(name == "bowtie.obj" || name == "fin.obj" || name == "trunc.off" || name == "nm_quad.obj" ||
+                name == "pillow.obj" || name == "stdout.txt" || name == "stderr.txt")
         << name;
   }
 }

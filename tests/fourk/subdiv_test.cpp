@@ -10,6 +10,10 @@
 #include <map>
 #include <random>
 #include <set>
+#include <functional>
+#include <string>
+
+#include <unistd.h>
 
 #include "fourk/poly_mesh.hpp"
 #include "multitri/errors.hpp"
@@ -347,6 +351,54 @@ TEST(Subdiv, BadInputIsRejectedBeforeAllocating) {
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("vertex 7"), std::string::npos) << e.what();
   }
+}
+
+// Found by a review: each of these used to reach the arithmetic or the allocator.
+TEST(Subdiv, ExtremeInputIsRejectedByName) {
+  auto message = [](const std::function<void()>& fn) -> std::string {
+    try {
+      fn();
+    } catch (const InvalidInput& e) {
+      return e.what();
+    }
+    return "(no InvalidInput)";
+  };
+  // A face of 2^16 corners: its centre's valence wrapped to 0 in 16 bits and moved points by ~1e6. (The
+  // repeated-corner check of validate() is linear now: this polygon took 53 s to validate before.)
+  PolyMesh big;
+  constexpr Index k = 65536;
+  for (Index i = 0; i < k; ++i) {
+    const double a = 6.283185307179586 * i / k;
+    big.positions.push_back({10.0 + std::cos(a), std::sin(a), 0.0});
+  }
+  std::vector<Index> ring(k);
+  for (Index i = 0; i < k; ++i) ring[i] = i;
+  big.add_face(ring);
+  EXPECT_NE(message([&] { subdivide(big, SubdivScheme::kCatmullClark, 2); }).find("face 0 has 65536 corners"), std::string::npos)
+      << message([&] { subdivide(big, SubdivScheme::kCatmullClark, 2); });
+  // Coordinates whose sums overflow.
+  PolyMesh huge = make_quad_cube();
+  huge.positions[2].x = 1e301;
+  EXPECT_NE(message([&] { subdivide(huge, SubdivScheme::kLinear, 2); }).find("vertex 2 has a coordinate beyond 1e300"),
+            std::string::npos);
+  // A stencil table whose fields (public) do not form a table.
+  StencilTable bad;
+  bad.num_inputs = 2;
+  bad.offsets = {0, 2};
+  bad.sources = {0, 5};
+  bad.weights = {0.5, 0.5};
+  const std::vector<double> in(6, 1.0);
+  EXPECT_NE(message([&] { bad.apply(in, 3); }).find("reads input 5 of 2"), std::string::npos);
+  EXPECT_NE(message([&] { bad.after(bad); }).find("reads input 5 of 2"), std::string::npos);
+  bad.sources = {0};
+  EXPECT_NE(message([&] { bad.apply(in, 3); }).find("do not match"), std::string::npos);
+  // More memory than the machine has: refused before allocating (26 binary steps of a cube are ~17 G
+  // vertices' worth of arrays, about 40 GB).
+  const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  if (ram > 30e9) GTEST_SKIP() << "more than 30 GB of memory here: 26 steps would not be refused";
+  EXPECT_NE(message([&] { subdivide(make_quad_cube(), SubdivScheme::kCatmullClark, 26); }).find("GB, more than the"),
+            std::string::npos)
+      << message([&] { subdivide(make_quad_cube(), SubdivScheme::kCatmullClark, 26); });
 }
 
 }  // namespace
