@@ -158,8 +158,9 @@ struct SubdivMesh {
 };
 
 /// `steps` binary steps of `scheme` on `base` (validated). Throws InvalidInput naming the parameter when
-/// steps < 0 or the result would have 2^32 elements or more (checked before allocating), and as
-/// make_subdiv_topology. Cost: linear in the output; peak memory holds two levels of topology.
+/// steps < 0, the result would have 2^32 elements or more, or its arrays (estimated, two levels) would not
+/// fit in the machine's physical memory (checked before allocating), and as make_subdiv_topology (which
+/// also refuses faces of more than 65535 corners). Cost: linear in the output; peak memory holds two levels of topology.
 SubdivMesh subdivide(const PolyMesh& base, SubdivScheme scheme, int steps, const SubdivOptions& options = {});
 
 /// The per-step stencil tables of subdivide(base, scheme, steps): table s maps the vertices after s steps
