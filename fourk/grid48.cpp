@@ -721,9 +721,16 @@ double Grid48::max_vertical_error(const TriMesh& mesh) const {
   double worst = 0.0;
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
     glm::dvec3 v[3];
+    // Lattice coordinates: a float position i * spacing divided by the spacing lands within a few float
+    // ulps of i (an ulp inside the grid at its border, which left border samples "uncovered" and the
+    // measure infinite for spacings other than 1); within 1e-6 relative, it is taken as i.
+    auto lattice = [](double t) {
+      const double r = std::round(t);
+      return std::abs(t - r) <= 1e-6 * std::max(1.0, std::abs(r)) ? r : t;
+    };
     for (int k = 0; k < 3; ++k) {
       const glm::vec3 p = mesh.positions[mesh.corner(f, k)];
-      v[k] = {double(p.x) / sx_, double(p.y) / sy_, double(p.z)};
+      v[k] = {lattice(double(p.x) / sx_), lattice(double(p.y) / sy_), double(p.z)};
     }
     const double det = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (v[1].y - v[0].y);
     if (std::abs(det) < 1e-12) continue;
@@ -1131,7 +1138,9 @@ QueryStats Grid48Front::extract_fast(const Query& q) {
       refined_[p] = 0;
     } else {
       faces += static_cast<std::size_t>(g.num_triangles(p));
-      if (check) g.for_each_parent(p, [&](Index par) { ideal = ideal && refined_[par] != 0; });
+      // A parent still marked 2 was rejected by the descent (cleared to 0 only as the loop reaches it):
+      // only 1 means refined.
+      if (check) g.for_each_parent(p, [&](Index par) { ideal = ideal && refined_[par] == 1; });
     }
   }
   if (!ideal) return extract(*this, q);  // non-monotone criterion: the generic least fixpoint
@@ -1360,11 +1369,18 @@ QueryStats Grid48Front::update_view(const ViewQuery& v) {
     step_moved_ = step_turned_ = 0.0f;
   } else {
     step_moved_ = glm::length(v.camera.eye - o.camera.eye);
-    // Rotation between the two view frames, as an angle (geodesic distance on SO(3)).
-    const glm::mat3 ra(o.camera.view()), rb(v.camera.view());
-    const glm::mat3 rel = glm::transpose(ra) * rb;
-    const float tr = rel[0][0] + rel[1][1] + rel[2][2];
-    step_turned_ = std::acos(std::clamp((tr - 1.0f) * 0.5f, -1.0f, 1.0f)) + 1e-6f;
+    // Rotation between the two view frames, as an angle (geodesic distance on SO(3)): |R - I|_F =
+    // 2 sqrt(2) sin(angle / 2), in double. The trace formula acos((tr R - 1) / 2) in float read a 1e-4 rad
+    // turn as 1e-6 (acos is flat near 1), so slow pans kept records past their expiry.
+    const glm::dmat3 ra(glm::mat3(o.camera.view())), rb(glm::mat3(v.camera.view()));
+    const glm::dmat3 rel = glm::transpose(ra) * rb;
+    double f2 = 0.0;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) {
+        const double d = rel[c][r] - (c == r ? 1.0 : 0.0);
+        f2 += d * d;
+      }
+    step_turned_ = static_cast<float>(2.0 * std::asin(std::min(1.0, std::sqrt(f2) / (2.0 * std::sqrt(2.0))))) + 1e-6f;
     moved_ += double(step_moved_);
     turned_ += double(step_turned_);
   }
@@ -1567,7 +1583,15 @@ void Grid48Front::coarsen_unchecked(Index p) {
   num_faces_ -= static_cast<std::size_t>(grid_->num_triangles(p));
 }
 
+void Grid48Front::check_diamond(Index p, const char* who) const {
+  if (p >= grid_->num_points() || !grid_->is_node(p))
+    throw InvalidInput(std::string("Grid48Front::") + who + ": " + std::to_string(p) +
+                           (p >= grid_->num_points() ? " is out of range" : " is a tile corner, not a diamond"),
+                       p);
+}
+
 void Grid48Front::coarsen_one(Index p) {
+  check_diamond(p, "coarsen_one");
   if (!is_coarsenable(p))
     throw InvalidInput("Grid48Front::coarsen_one: diamond " + std::to_string(p) +
                            (refined_[p] ? " has a refined child" : " is not refined"),

@@ -211,6 +211,9 @@ class Grid48Front {
   void reset();
   bool is_refined(Index p) const noexcept { return refined_[p] != 0; }
   bool is_coarsenable(Index p) const noexcept;
+  /// Throws InvalidInput naming `p` and `who` when p is not a diamond of the grid (out of range, or a tile
+  /// corner: those are never refined). refine() and coarsen_one() check.
+  void check_diamond(Index p, const char* who) const;
   ElementBound element_bound(Index p) const noexcept { return grid_->bound(p); }
   std::uint64_t tie_key(Index p) const noexcept { return (std::uint64_t(grid_->level(p)) << 32) | p; }
   template <class Sink> void refine(Index p, Sink&& sink);
@@ -528,6 +531,7 @@ inline bool Grid48Front::is_coarsenable(Index p) const noexcept {
 
 template <class Sink>
 void Grid48Front::refine(Index p, Sink&& sink) {
+  check_diamond(p, "refine");
   if (refined_[p]) return;
   if (!sets_valid_) rebuild_sets();
   refine_target_ = p;

@@ -12,7 +12,26 @@
 
 namespace varmesh {
 
-glm::mat4 Camera::view() const { return glm::lookAt(eye, target, up); }
+namespace {
+// lookAt needs an up vector that is not parallel to the view direction (else every plane of the frustum is
+// NaN and culling silently stops); a top view of a terrain with the default +z up is the common case. Fall
+// back to the world axis least aligned with the view (y first).
+glm::vec3 usable_up(const glm::vec3& forward, const glm::vec3& up) {
+  if (glm::length(glm::cross(forward, up)) > 1e-3f * glm::length(up)) return up;
+  const glm::vec3 a = glm::abs(forward);
+  return a.y <= a.x && a.y <= a.z ? glm::vec3(0.0f, 1.0f, 0.0f)
+         : a.x <= a.z             ? glm::vec3(1.0f, 0.0f, 0.0f)
+                                  : glm::vec3(0.0f, 0.0f, 1.0f);
+}
+}  // namespace
+
+glm::vec3 Camera::view_up() const {
+  const glm::vec3 d = target - eye;
+  const float len = glm::length(d);
+  return len > 0.0f ? usable_up(d / len, up) : up;
+}
+
+glm::mat4 Camera::view() const { return glm::lookAt(eye, target, view_up()); }
 
 glm::mat4 Camera::projection() const {
   return glm::perspective(glm::radians(fov_y_deg), aspect, z_near, z_far);
@@ -25,16 +44,18 @@ float Camera::pixels_per_unit_at_distance_one(float viewport_height) const {
 }
 
 Frustum Camera::frustum() const {
-  // Gribb-Hartmann extraction from the clip matrix: each plane is a sum or difference of matrix rows.
-  const glm::mat4 m = projection() * view();
-  auto row = [&](int i) { return glm::vec4(m[0][i], m[1][i], m[2][i], m[3][i]); };
-  const glm::vec4 r0 = row(0), r1 = row(1), r2 = row(2), r3 = row(3);
-  const glm::vec4 raw[6] = {r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2, r3 - r2};
+  // Gribb-Hartmann extraction from the clip matrix: each plane is a sum or difference of matrix rows. In
+  // double: with z_far / z_near near 1e8 the far plane's rows cancel in float (a NaN plane culls nothing).
+  const glm::dmat4 m = glm::perspective(glm::radians(double(fov_y_deg)), double(aspect), double(z_near), double(z_far)) *
+                       glm::lookAt(glm::dvec3(eye), glm::dvec3(target), glm::dvec3(view_up()));
+  auto row = [&](int i) { return glm::dvec4(m[0][i], m[1][i], m[2][i], m[3][i]); };
+  const glm::dvec4 r0 = row(0), r1 = row(1), r2 = row(2), r3 = row(3);
+  const glm::dvec4 raw[6] = {r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2, r3 - r2};
   Frustum f;
   for (int i = 0; i < 6; ++i) {
-    const glm::vec3 n(raw[i]);
-    const float len = glm::length(n);
-    f.planes[static_cast<std::size_t>(i)] = Plane{n / len, raw[i].w / len};
+    const glm::dvec3 n(raw[i]);
+    const double len = glm::length(n);
+    f.planes[static_cast<std::size_t>(i)] = Plane{glm::vec3(n / len), static_cast<float>(raw[i].w / len)};
   }
   return f;
 }
@@ -57,16 +78,7 @@ Camera frame_sphere(const glm::vec3& center, float radius, const glm::vec3& dir,
   const glm::vec3 forward = dir / dir_len;
   cam.target = center;
   cam.eye = center - forward * dist;
-  // lookAt needs an up vector that is not parallel to the view direction; a top view of a terrain with the
-  // default +z up is the common case. Fall back to the world axis least aligned with the view (y first).
-  cam.up = up;
-  const float up_len = glm::length(up);
-  if (!(glm::length(glm::cross(forward, up)) > 1e-3f * up_len)) {
-    const glm::vec3 a = glm::abs(forward);
-    cam.up = a.y <= a.x && a.y <= a.z ? glm::vec3(0.0f, 1.0f, 0.0f)
-             : a.x <= a.z             ? glm::vec3(1.0f, 0.0f, 0.0f)
-                                      : glm::vec3(0.0f, 0.0f, 1.0f);
-  }
+  cam.up = usable_up(forward, up);
   cam.z_near = std::max(dist - radius * 1.5f, dist * 1e-3f);
   cam.z_far = dist + radius * 1.5f;
   return cam;

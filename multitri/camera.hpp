@@ -39,7 +39,11 @@ struct Camera {
   float z_near = 0.01f;
   float z_far = 1000.0f;
 
+  /// lookAt(eye, target, up); an `up` parallel to the view direction (a top view with the default +z up)
+  /// is replaced by the world axis least aligned with the view (+y first), as frame_sphere does.
   glm::mat4 view() const;
+  /// The up vector view() uses (see above).
+  glm::vec3 view_up() const;
   glm::mat4 projection() const;
   Frustum frustum() const;
   /// Pixels per unit of world length seen at distance 1 on a viewport `viewport_height` pixels high.

@@ -1,6 +1,7 @@
 #include "multitri/mt.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <iterator>
 #include <cmath>
 #include <numeric>
@@ -96,6 +97,10 @@ NodeId MtBuilder::add_node(NodeKind kind, std::span<const FaceId> removed, std::
                            float error) {
   const NodeId id = static_cast<NodeId>(kinds_.size() + 1);  // builder node 0 is the source
   if (kind == NodeKind::kSource) throw InvalidInput("MtBuilder: only set_base creates the source", id);
+  if (kind != NodeKind::kSplit && kind != NodeKind::kSwap && kind != NodeKind::kGeneric)
+    throw InvalidInput("MtBuilder: node " + std::to_string(id) + " has an unknown kind " +
+                           std::to_string(static_cast<int>(kind)),
+                       id);
   if (!(error >= 0.0f) || !std::isfinite(error)) throw InvalidInput("MtBuilder: node error must be finite and >= 0", id);
   kinds_.push_back(kind);
   errors_.push_back(error);
@@ -194,6 +199,40 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
       std::set_symmetric_difference(b0.begin(), b0.end(), b1.begin(), b1.end(), std::back_inserter(diff));
       for (std::uint64_t e : diff)
         if (!on_border(e)) fail("its image does not have the same oriented boundary as its pre-image", n);
+      // On the border, each edge u -> v the node takes away must come back subdivided: a path of new edges
+      // u -> ... -> v, every new edge on one such path. (Any other change of border edges passed before,
+      // and two nodes could then create the same directed edge in one front.)
+      if (!diff.empty()) {
+        std::vector<std::uint64_t> gone, added;
+        std::set_difference(b0.begin(), b0.end(), b1.begin(), b1.end(), std::back_inserter(gone));
+        std::set_difference(b1.begin(), b1.end(), b0.begin(), b0.end(), std::back_inserter(added));
+        std::vector<std::uint8_t> used(added.size(), 0);
+        auto next_from = [&](Index u) -> std::size_t {  // the unused added edge leaving u, if exactly one
+          auto it = std::lower_bound(added.begin(), added.end(), std::uint64_t{u} << 32);
+          std::size_t found = added.size(), count = 0;
+          for (; it != added.end() && (*it >> 32) == u; ++it)
+            if (!used[static_cast<std::size_t>(it - added.begin())]) found = static_cast<std::size_t>(it - added.begin()), ++count;
+          return count == 1 ? found : added.size();
+        };
+        for (std::uint64_t e : gone) {
+          const Index u = static_cast<Index>(e >> 32), v = static_cast<Index>(e & 0xFFFFFFFFu);
+          Index at = u;
+          for (std::size_t steps = 0; at != v; ++steps) {
+            const std::size_t k = next_from(at);
+            if (k == added.size() || steps > added.size())
+              fail("changes the structure's border other than by subdividing edge " + std::to_string(u) + "-" +
+                       std::to_string(v),
+                   n);
+            used[k] = 1;
+            at = static_cast<Index>(added[k] & 0xFFFFFFFFu);
+          }
+        }
+        for (std::size_t k = 0; k < added.size(); ++k)
+          if (!used[k])
+            fail("adds border edge " + std::to_string(added[k] >> 32) + "-" + std::to_string(added[k] & 0xFFFFFFFFu) +
+                     " that subdivides no edge it takes away",
+                 n);
+      }
       for (std::uint64_t e : i0)
         if (std::binary_search(i1.begin(), i1.end(), e))
           fail("keeps an interior edge of its pre-image (not a minimal modification)", n);
@@ -382,7 +421,10 @@ std::uint16_t Mt::Frame::encode_radius(float need) const {
   // Smallest code whose decoded radius covers `need` with a relative slack: nested spheres must stay
   // nested after the float rounding of distances computed from them (see enclose()).
   const float target = need * (1.0f + 2e-6f);
-  if (radius(65535) < target) throw InvalidInput("MtBuilder: bounding sphere too large to pack", 0);
+  if (!(radius(65535) >= target))
+    throw InvalidInput("MtBuilder: bounding sphere of radius " + std::to_string(need) +
+                           " too large to pack (the coordinates span more than float can measure?)",
+                       0);
   std::uint32_t first = 0, last = 65535;
   while (first < last) {
     const std::uint32_t mid = (first + last) / 2;
@@ -399,7 +441,8 @@ void Mt::pack_bounds(const std::vector<ElementBound>& bounds, bool nest) {
   for (const glm::vec3& p : positions_) box.add(p);
   for (const ElementBound& b : bounds) box.add(b.center);
   frame_.lo = box.lo;
-  frame_.step = (box.hi - box.lo) / 65535.0f;
+  // In double: hi - lo overflows float for coordinates near +-3.4e38 (inf steps decode centres as NaN).
+  frame_.step = glm::vec3((glm::dvec3(box.hi) - glm::dvec3(box.lo)) / 65535.0);
   // Lengths in double here and below: |d|^2 of float vectors overflows past coordinates of ~1.8e19.
   const auto dist = [](const glm::vec3& a, const glm::vec3& b) {
     return static_cast<float>(glm::length(glm::dvec3(a) - glm::dvec3(b)));
@@ -411,7 +454,7 @@ void Mt::pack_bounds(const std::vector<ElementBound>& bounds, bool nest) {
   float largest = 0.0f;
   for (const ElementBound& b : bounds)
     if (std::isfinite(b.radius)) largest = std::max(largest, b.radius);
-  frame_.unit = std::max(diag, largest);
+  frame_.unit = std::min(std::max(diag, largest), std::numeric_limits<float>::max());
   if (!(frame_.unit > 0.0f)) frame_.unit = 1.0f;
   bounds_.resize(bounds.size());
   for (std::size_t n = 0; n < bounds.size(); ++n) {

@@ -9,11 +9,14 @@
 /// - Nodes are numbered so that every parent precedes its children; faces are numbered by their creator,
 ///   so the image of node n is the face range [image_begin(n), image_end(n)).
 ///
-/// Invariants (checked by MtBuilder::build and by validate()): every face is created by exactly one node
-/// and removed by at most one; the DAG is acyclic (parents precede children); no two faces have the same three vertices (non-redundancy); every node's image has the same oriented
-/// boundary as its pre-image and no interior edge of the pre-image survives in the image (minimally
-/// compatible modification, section 3.1). Consequently every front (order ideal of nodes) is a conforming
-/// mesh when the base mesh is.
+/// Invariants: every face is created by exactly one node and removed by at most one; the DAG is acyclic
+/// (parents precede children); no two faces have the same three vertices (non-redundancy); every node's
+/// image has the same oriented boundary as its pre-image, except that an edge on the border of the whole
+/// structure may come back subdivided (a path of edges between its ends), and no interior edge of the
+/// pre-image survives in the image (minimally compatible modification, section 3.1). Consequently every
+/// front (order ideal of nodes) is a conforming mesh when the base mesh is. MtBuilder::build checks all of
+/// them (the geometric ones unless Options::check_geometry is off); validate() re-checks the structure
+/// (counts, ranges, creators, destroyers, the order of parents and children), not the geometric ones.
 ///
 /// Storage (about 45 bytes per finest face on a semi-regular 4-8 bunny; BENCHMARKS.md): per face its
 /// corners (three 21-bit indices in 8 bytes up to 2^21 vertices, 12 bytes beyond) and its destroyer; per
@@ -108,7 +111,8 @@ class Mt {
     return b;
   }
 
-  /// Re-checks every invariant listed above; throws InvalidInput naming the node or face. O(size log size).
+  /// Re-checks the structural invariants (see above: not non-redundancy nor the boundary rules, which
+  /// MtBuilder::build checks); throws InvalidInput naming the node or face. O(size log size).
   void validate() const;
   /// Bytes held by this structure (its arrays and the object itself), and the same split by array.
   std::size_t memory_bytes() const noexcept;

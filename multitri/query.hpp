@@ -227,15 +227,19 @@ struct NoTouch {
 
 class Deadline {
  public:
+  // A budget beyond a year (or infinite) is no budget: converted to integer nanoseconds it would overflow
+  // and put the deadline in the past.
   explicit Deadline(double ms)
-      : active_(ms > 0.0), end_(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                        std::chrono::duration<double, std::milli>(ms))) {}
+      : active_(ms > 0.0 && ms < kYearMs),
+        end_(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                    std::chrono::duration<double, std::milli>(active_ ? ms : 0.0))) {}
   bool passed() {
     if (!active_ || (++calls_ & 63u) != 0) return false;
     return std::chrono::steady_clock::now() >= end_;
   }
 
  private:
+  static constexpr double kYearMs = 365.0 * 24.0 * 3600.0 * 1000.0;
   bool active_;
   std::chrono::steady_clock::time_point end_;
   std::uint32_t calls_ = 0;

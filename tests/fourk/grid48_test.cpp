@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "fourk/grid48.hpp"
+#include "multitri/errors.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/mesh_report.hpp"
 #include "multitri/mt_front.hpp"
@@ -579,6 +580,94 @@ TEST(Grid48, ExactErrorsMatchABruteForceOverTheMt) {
       ++checked;
     }
     EXPECT_EQ(checked, g.num_nodes());
+  }
+}
+
+// Found by a review (each failed before its fix).
+
+// extract_fast() falls back to extract() for a non-monotone criterion when its descent leaves a diamond
+// refined without its parent; the check read parents the descent had rejected (still marked) as refined.
+TEST(Grid48, ExtractFastFallsBackForNonMonotoneCriteria) {
+  HeightField hf;
+  hf.width = 45, hf.height = 38;
+  hf.z.resize(hf.width * hf.height);
+  for (std::size_t i = 0; i < hf.z.size(); ++i)
+    hf.z[i] = std::sin(0.3f * static_cast<float>(i % 45)) * 3.0f + std::cos(0.2f * static_cast<float>(i / 45));
+  const Grid48 g(hf);
+  for (unsigned seed = 150; seed < 170; ++seed) {
+    auto fn = [seed](const ElementBound& b) {
+      const unsigned h = static_cast<unsigned>(b.center.x * 7 + b.center.y * 131) * 2654435761u ^ seed * 40503u;
+      return (h >> 7) % 5 == 0 || b.error < 0.05f * static_cast<float>(seed % 7);
+    };
+    Query q;
+    q.criterion = Criterion::custom(fn);
+    q.focus.spheres.push_back({{20, 15, 0}, 10});
+    Grid48Front a(g), b(g);
+    extract(a, q);
+    b.extract_fast(q);
+    ASSERT_NO_THROW(b.validate()) << "seed " << seed;
+    EXPECT_EQ(a.num_faces(), b.num_faces()) << "seed " << seed;
+  }
+}
+
+// update_view() under a slow pan (eye fixed, 2e-4 rad per frame): the turn was measured as acos((tr R -
+// 1) / 2) in float, which reads such a turn as ~1e-6, so records outlived their expiry and the front drifted
+// from extract() (from frame 50 on).
+TEST(Grid48, UpdateViewFollowsASlowPanExactly) {
+  HeightField hf;
+  hf.width = 129, hf.height = 129;
+  hf.z.resize(hf.width * hf.height);
+  for (std::size_t y = 0; y < hf.height; ++y)
+    for (std::size_t x = 0; x < hf.width; ++x)
+      hf.z[y * hf.width + x] = 6.0f * std::sin(0.11f * static_cast<float>(x)) * std::cos(0.07f * static_cast<float>(y)) +
+                               0.5f * std::sin(1.3f * static_cast<float>(x) + 0.7f * static_cast<float>(y));
+  const Grid48 g(hf);
+  Grid48Front vf(g), ref(g);
+  ViewQuery v;
+  v.camera.eye = {64, 64, 20};
+  v.camera.fov_y_deg = 40;
+  v.camera.z_near = 0.1f;
+  v.camera.z_far = 1000;
+  v.viewport_height = 1000;
+  v.pixels = 1.0f;
+  for (int i = 0; i < 1200; ++i) {
+    const float a = 2e-4f * static_cast<float>(i);
+    v.camera.target = v.camera.eye + glm::vec3(std::cos(a), std::sin(a), -0.3f);
+    vf.update_view(v);
+    if (i % 100 != 99) continue;
+    extract(ref, v.to_query());
+    std::size_t differ = 0;
+    for (Index p = 0; p < g.num_points(); ++p) differ += vf.is_refined(p) != ref.is_refined(p);
+    EXPECT_EQ(differ, 0u) << "frame " << i;
+  }
+}
+
+// refine() and coarsen_one() on an index that is no diamond: a tile corner looped until out of memory, an
+// index out of range read past the arrays.
+TEST(Grid48, FrontEditsCheckTheirIndex) {
+  const Grid48 g(make_fractal_terrain(33, 33, 3, 10.0f));
+  Grid48Front f(g);
+  EXPECT_THROW(f.refine(0), InvalidInput);  // a tile corner
+  EXPECT_THROW(f.refine(static_cast<Index>(g.num_points())), InvalidInput);
+  EXPECT_THROW(f.coarsen_one(static_cast<Index>(g.num_points()) + 1000), InvalidInput);
+  f.validate();
+}
+
+// The measure behind `terrain --measure` rebuilt lattice coordinates by dividing float positions by the
+// spacing: border vertices landed an ulp inside the grid and border samples counted as holes (infinite).
+TEST(Grid48, MeasuredErrorWithASpacing) {
+  HeightField flat;
+  flat.width = 65, flat.height = 60;
+  flat.z.assign(flat.width * flat.height, 2.0f);
+  for (const float spacing : {0.1f, 0.37f, 3.3f}) {
+    HeightField h = flat;
+    h.spacing_x = h.spacing_y = spacing;
+    const Grid48 g(h);
+    Grid48Front f(g);
+    Query q;
+    q.criterion = Criterion::object_error(0.5f);
+    extract(f, q);
+    EXPECT_LE(g.max_vertical_error(f.extract_mesh(q)), 1e-9) << "spacing " << spacing;  // was infinite
   }
 }
 

@@ -118,6 +118,26 @@ void expect_sphere_framed(const Camera& cam, const glm::vec3& center, float radi
   EXPECT_GT(std::max(extent_x, extent_y), 0.75f);
 }
 
+// A camera looking straight down with the default +z up: lookAt degenerated and every frustum plane was
+// NaN, so culling silently stopped (a top view of a terrain kept 20x the triangles). And z_far / z_near
+// of 1e8 cancelled the far plane's rows in float.
+TEST(Camera, TopViewAndDeepFrustaHaveFinitePlanes) {
+  Camera c;
+  c.eye = {200, 170, 300};
+  c.target = {200, 170, 0};
+  c.fov_y_deg = 60;
+  c.z_near = 0.1f;
+  c.z_far = 1e7f;
+  const Frustum f = c.frustum();
+  for (const Plane& p : f.planes) {
+    EXPECT_TRUE(std::isfinite(p.n.x) && std::isfinite(p.n.y) && std::isfinite(p.n.z) && std::isfinite(p.d));
+    EXPECT_NEAR(glm::length(p.n), 1.0f, 1e-5f);
+  }
+  EXPECT_TRUE(f.contains_point({200, 170, 0}));
+  EXPECT_FALSE(f.contains_point({1e6f, 0, 1e6f}));
+  EXPECT_FALSE(f.contains_point({200, 170, 400}));  // behind the eye
+}
+
 TEST(Camera, FrameSphereKeepsTheSphereInView) {
   std::mt19937 rng(3);
   for (int trial = 0; trial < 100; ++trial) {

@@ -1,6 +1,7 @@
 // MtBuilder's checks of the Multi-Triangulation definition, and the renumbering it does.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -127,6 +128,53 @@ TEST(Mt, RejectsBoundaryChange) {
   s.b.add_node(NodeKind::kGeneric, r2, c2, 0.0f);
   const std::string msg = message_of(std::move(s.b));
   EXPECT_NE(msg.find("oriented boundary"), std::string::npos) << msg;
+}
+
+// A border edge may only come back subdivided. Any change of border edges passed before: two nodes could
+// each rewrite an isolated triangle so that both new faces hold the directed edge 1 -> 6, and the front
+// with both applied was not conforming (found by a review).
+TEST(Mt, RejectsBorderChangesOtherThanSubdivision) {
+  MtBuilder b;
+  for (int i = 0; i < 8; ++i) b.add_vertex({float(i % 3), float(i / 3), float(i) * 0.1f});
+  const FaceId t1 = b.add_face(0, 1, 2), t2 = b.add_face(3, 4, 5);
+  const FaceId a = b.add_face(0, 1, 6), c = b.add_face(1, 6, 7);
+  const FaceId base[] = {t1, t2};
+  b.set_base(base);
+  const FaceId ra[] = {t1}, ca[] = {a}, rb[] = {t2}, cb[] = {c};
+  b.add_node(NodeKind::kGeneric, ra, ca, 0.5f);
+  b.add_node(NodeKind::kGeneric, rb, cb, 0.5f);
+  const std::string msg = message_of(std::move(b));
+  EXPECT_NE(msg.find("other than by subdividing edge"), std::string::npos) << msg;
+}
+
+// A kind outside the enumeration built, and the Mt then failed its own file format.
+TEST(Mt, RejectsUnknownNodeKind) {
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  EXPECT_THROW(s.b.add_node(static_cast<NodeKind>(7), removed, s.c, 0.0f), InvalidInput);
+}
+
+// Coordinates near float's limit: the packed bounds' frame step (hi - lo) / 65535 overflowed and decoded
+// every centre as NaN.
+TEST(Mt, BoundsOfHugeCoordinatesStayFinite) {
+  MtBuilder b;
+  const float big = 3.0e38f;
+  b.add_vertex({-big, -big, 0});
+  b.add_vertex({big, -big, 0});
+  b.add_vertex({0, big, 0});
+  b.add_vertex({0, -big, 0.5f});
+  const FaceId t = b.add_face(0, 1, 2);
+  const FaceId base[] = {t};
+  b.set_base(base);
+  const FaceId c0 = b.add_face(0, 3, 2), c1 = b.add_face(3, 1, 2);
+  const FaceId removed[] = {t}, created[] = {c0, c1};
+  b.add_node(NodeKind::kSplit, removed, created, 1.0f);
+  const Mt mt = std::move(b).build();
+  for (NodeId n = 0; n < mt.num_nodes(); ++n) {
+    const ElementBound e = mt.bound(n);
+    EXPECT_TRUE(std::isfinite(e.center.x) && std::isfinite(e.center.y) && std::isfinite(e.center.z)) << "node " << n;
+    EXPECT_FALSE(std::isnan(e.radius)) << "node " << n;
+  }
 }
 
 TEST(Mt, RejectsRedundantFace) {

@@ -512,6 +512,23 @@ TEST(QueryBudget, TimeBudgetGivesAConformingSubsetOfTheAnswer) {
   expect_conforming(f, g.domain_area);
 }
 
+// A budget too large for integer nanoseconds (or infinite) overflowed into a deadline in the past: the
+// query stopped after its first steps.
+TEST(QueryBudget, HugeTimeBudgetsAreNoBudget) {
+  const GridMt g = terrain_mt(3, 6, 2);
+  Query q;
+  q.criterion = Criterion::object_error(0.0f);
+  MtFront unlimited(g.mt);
+  extract(unlimited, q);
+  for (const double ms : {1e13, 1e300, std::numeric_limits<double>::infinity()}) {
+    q.time_budget_ms = ms;
+    MtFront f(g.mt);
+    const QueryStats st = extract(f, q);
+    EXPECT_FALSE(st.time_reached) << ms;
+    EXPECT_EQ(f.num_applied(), unlimited.num_applied()) << ms;
+  }
+}
+
 TEST(QueryFocus, OutsideTheFocusNothingIsRefined) {
   const GridMt g = terrain_mt(3, 6, 17);
   const Mt& mt = g.mt;
