@@ -55,8 +55,9 @@ void apply_raw_size(const std::string& text, HeightFieldReadOptions& options);
 /// finite float); the commands that compute geometry read through this.
 TriMesh read_input_mesh(const std::string& path, ReadInfo* info = nullptr);
 
-/// Writes `mesh` to `mesh_path`, then `picture` (when not null) to `png_path`. When the picture cannot be
-/// written the mesh file is removed again, so that a failed run leaves neither file. Rethrows the error.
+/// Writes `mesh` to `mesh_path` and `picture` (when not null) to `png_path`, both or neither: the mesh is
+/// staged under a temporary name and moved into place after the picture is written, so a failed run leaves
+/// both paths as they were (an existing file included). Rethrows the error, naming the user's path.
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture);
 

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <string>
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 
 #include "apps/cli_util.hpp"
@@ -140,14 +142,34 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
 
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture) {
-  write_mesh(mesh_path, mesh);
-  if (!picture) return;
+  if (!picture) {
+    write_mesh(mesh_path, mesh);
+    return;
+  }
+  // The mesh goes to a temporary name beside its target (same extension: write_mesh picks the format by it),
+  // then the picture to its place, and only then the mesh is renamed into place. A picture that cannot be
+  // written leaves whatever was at mesh_path as it was (removing the new mesh instead had deleted a file
+  // the user already had there).
+  namespace fs = std::filesystem;
+  const fs::path target(mesh_path);
+  const fs::path staged = target.parent_path() / ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) +
+                                                  target.extension().string());
+  try {
+    write_mesh(staged.string(), mesh);
+  } catch (const IoError& e) {
+    throw IoError(mesh_path, e.reason());  // the user's name, not the staging one
+  }
+  std::error_code ec;
   try {
     write_png(png_path, *picture);
   } catch (...) {
-    std::error_code ec;
-    std::filesystem::remove(mesh_path, ec);
+    fs::remove(staged, ec);
     throw;
+  }
+  fs::rename(staged, target, ec);
+  if (ec) {
+    fs::remove(staged, ec);
+    throw IoError(mesh_path, "cannot move the written mesh into place");
   }
 }
 
@@ -266,12 +288,19 @@ int cmd_render(const RenderArgs& a) {
   if (!a.target.empty()) cam.target = parse_vec3(a.target, "--target");
   cam.fov_y_deg = a.fov;
   if (!a.eye.empty() || !a.target.empty()) {
-    const float r = mesh.bounds().diagonal();
-    const float dist = glm::length(cam.eye - cam.target);
-    cam.z_near = std::max(1e-4f * (dist + r), dist - r);
-    cam.z_far = dist + r;
-    if (cam.z_near <= 0.0f) cam.z_near = 1e-3f * r;
+    // Near and far planes around the mesh's bounding sphere seen from the eye (they were measured from the
+    // target, so a target away from the mesh put the mesh past the far plane: a blank picture).
+    Box3 box;
+    for (Index i : mesh.indices) box.add(mesh.positions[i]);
+    const glm::vec3 c = box.center();
+    const float r = std::max(0.5f * box.diagonal(), 1e-3f * std::max(1.0f, glm::length(c)));
+    const float d = glm::length(cam.eye - c);
+    cam.z_far = d + r;
+    cam.z_near = std::max(1e-4f * (d + r), d - r);
+    if (!(cam.z_near < cam.z_far) || !std::isfinite(cam.z_far))
+      throw InvalidInput("render: --eye " + a.eye + " is too far from the mesh to see it (" + std::to_string(d) + " units away)");
   }
+  cam.up = cam.view_up();  // a top view with the default +z up: another axis, as Camera::view() does
   RenderOptions o;
   o.width = a.width;
   o.height = a.height;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -16,6 +17,8 @@
 #include <string>
 #include <unordered_map>
 #include <vector>
+
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
@@ -290,8 +293,10 @@ TriMesh make_torus(int n, int m, float big_r, float small_r) {
 
 struct Options {
   fs::path out;
-  // The files this run wrote, so that a failed run can take them back (no partial output).
-  mutable std::vector<fs::path> written;
+  // Files are written into a staging folder inside `out` and moved into `out` when the whole run has
+  // succeeded: a failed run leaves `out` as it was, earlier results included (no partial output).
+  fs::path stage;
+  mutable std::vector<std::string> written;  // names, in the staging folder
   std::vector<std::string> cases;
   fs::path data;
   bool data_present = false;
@@ -305,11 +310,10 @@ struct Options {
   bool quick = false, quiet = false;
 };
 
-// write_png into the output folder, remembered in o.written.
+// write_png into the staging folder, remembered in o.written.
 void write_output_png(const Options& o, const std::string& name, const Image& image) {
-  const fs::path path = o.out / name;
-  write_png(path.string(), image);
-  o.written.push_back(path);
+  write_png((o.stage / name).string(), image);
+  o.written.push_back(name);
 }
 
 const char* cost_name(const Options& o) {
@@ -400,7 +404,9 @@ CaseInput image_case(const Options& o) {
     c.source = "generated discs and gradient";
   } else {
     const std::string ext = fs::path(file).extension().string();
-    img = (ext == ".pgm" || ext == ".PGM") ? read_pgm(file) : read_png(file);
+    std::string lower = ext;
+    for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    img = lower == ".pgm" ? read_pgm(file) : read_png(file);
     const std::size_t factor = std::max<std::size_t>(1, (std::max(img.width, img.height) + o.grid - 1) / o.grid);
     img = downsample_image(img, factor);
     c.source = fs::path(file).filename().string() + (factor > 1 ? " / " + std::to_string(factor) : std::string());
@@ -902,9 +908,8 @@ std::string csv_table(const std::vector<CaseResult>& results) {
 }
 
 void write_text(const Options& o, const std::string& name, const std::string& text) {
-  const fs::path path = o.out / name;
-  write_file_atomically(path.string(), text);
-  o.written.push_back(path);
+  write_file_atomically((o.stage / name).string(), text);
+  o.written.push_back(name);
 }
 
 }  // namespace
@@ -928,21 +933,38 @@ void add_compare_options(CLI::App& sub, CompareArgs& args) {
 static int run_compare_in(const Options& o);
 
 int run_compare(const CompareArgs& args) {
-  const Options o = parse_options(args);
+  Options o = parse_options(args);
   std::error_code ec;
-  const bool existed = fs::exists(o.out, ec);
+  // The folders this run makes (the output folder and missing parents), deepest first. symlink_status: a
+  // dangling link is the user's, not something to make or take back.
+  std::vector<fs::path> made;
+  for (fs::path p = fs::absolute(o.out).lexically_normal(); !p.empty(); p = p.parent_path()) {
+    if (fs::exists(fs::symlink_status(p, ec))) break;
+    made.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  auto take_back = [&] {
+    if (!o.stage.empty()) fs::remove_all(o.stage, ec);
+    for (const fs::path& p : made) fs::remove(p, ec);  // only if still empty
+  };
   try {
-    return run_compare_in(o);
+    fs::create_directories(o.out);
+    o.stage = o.out / (".varmesh-compare-" + std::to_string(::getpid()));
+    fs::create_directory(o.stage);
+    const int status = run_compare_in(o);
+    for (const std::string& name : o.written) fs::rename(o.stage / name, o.out / name);
+    fs::remove(o.stage, ec);
+    return status;
+  } catch (const fs::filesystem_error& e) {
+    take_back();
+    throw IoError(e.path1().empty() ? o.out.string() : e.path1().string(), e.code().message());
   } catch (...) {
-    // No partial output: what this run wrote goes, and the folder too if this run made it.
-    for (const fs::path& p : o.written) fs::remove(p, ec);
-    if (!existed) fs::remove_all(o.out, ec);
+    take_back();
     throw;
   }
 }
 
 static int run_compare_in(const Options& o) {
-  fs::create_directories(o.out);
   if (!o.data_note.empty() && !o.quiet) std::fprintf(stderr, "[varmesh] %s\n", o.data_note.c_str());
 
   bool failed = false;

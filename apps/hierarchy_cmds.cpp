@@ -73,7 +73,8 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
                  "quadric's minimiser) or lindstrom-turk");
   sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(CLI::NonNegativeNumber);
   sub.add_option("--vertices", a.vertices, "stop at this many vertices")->check(CLI::NonNegativeNumber);
-  sub.add_option("--max-error", a.max_error, "stop before a collapse whose error exceeds this (object units)");
+  sub.add_option("--max-error", a.max_error, "stop before a collapse whose error exceeds this (object units)")
+      ->check(check_non_negative);
   sub.add_flag("--colors", a.colors, "colour quadrics (GH98) when the mesh has vertex colours");
   sub.add_option("--non-manifold", a.non_manifold, "split (default): cut non-manifold edges and vertices into sheets; "
                                                     "lock: also keep the copies from collapsing");
@@ -307,8 +308,7 @@ int run_pm_build(const PmBuildArgs& a) {
   parse_collapse_cost(a.cost, o.cost, o.preserve_volume);
   if (a.non_manifold == "lock") o.non_manifold = NonManifoldPolicy::kLock;
   else if (a.non_manifold != "split") throw InvalidInput("--non-manifold: unknown '" + a.non_manifold + "' (known: split, lock)");
-  if (std::isnan(a.max_error) || (a.max_error < 0.0f && a.max_error != -1.0f))  // -1: not given
-    throw InvalidInput("--max-error must be a number >= 0");
+  if (std::isnan(a.max_error)) throw InvalidInput("--max-error must be a number >= 0");  // < 0 (not given) otherwise
   if (a.max_error >= 0.0f) o.max_error = a.max_error;
   o.target_faces = a.faces;
   o.target_vertices = a.vertices;
@@ -320,7 +320,12 @@ int run_pm_build(const PmBuildArgs& a) {
       std::fprintf(stderr, "\r[varmesh] %zu collapses, %zu vertices left   ", done, left);
     };
   QemStats st;
-  const VertexHierarchy h = build_vertex_hierarchy(mesh, o, &st);
+  VertexHierarchy h;
+  try {
+    h = build_vertex_hierarchy(mesh, o, &st);
+  } catch (const InvalidInput& e) {
+    throw IoError(a.input, e.what());  // name the file (e.g. "mesh has no non-degenerate face")
+  }
   if (!a.quiet && st.collapses >= 4096) std::fprintf(stderr, "\n");
   write_vertex_hierarchy(a.output, h);
   const InputRepairReport& r = h.repair_report();

@@ -522,15 +522,18 @@ Image render_mesh(const TriMesh& mesh, const Camera& camera, const RenderOptions
 Camera default_camera_for(const TriMesh& mesh, float aspect) {
   if (!(aspect > 0.0f) || !std::isfinite(aspect))
     throw InvalidInput("default_camera_for: aspect " + std::to_string(aspect) + " is not a positive number");
-  const Box3 box = mesh.bounds();
+  // The referenced vertices only: an unreferenced one far away framed an empty picture (or, near float's
+  // limit, an infinite sphere).
+  Box3 box;
+  for (Index i : mesh.indices) box.add(mesh.positions[i]);
   glm::vec3 center(0.0f);
   float radius = 1.0f;
   bool flat = false;
   if (!box.empty()) {
     center = box.center();
     float r2 = 0.0f;
-    for (const auto& p : mesh.positions) {
-      const glm::vec3 d = p - center;
+    for (Index i : mesh.indices) {
+      const glm::vec3 d = mesh.positions[i] - center;
       r2 = std::max(r2, glm::dot(d, d));
     }
     radius = std::sqrt(r2);

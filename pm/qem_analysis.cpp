@@ -15,12 +15,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <string>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "multitri/errors.hpp"
@@ -263,6 +265,7 @@ class Analysis {
   std::vector<Geo> geo_;
   std::vector<AttributeQuadric> aq_;
   bool colors_ = false;
+  glm::vec3 color_lo_{0.0f}, color_hi_{1.0f};  // the input colours' range, per component
   bool lt_ = false;  // Lindstrom-Turk costs and placement (QemOptions::cost)
   bool volume_ = false;  // QemOptions::preserve_volume applies (quadric cost, no colours)
   std::vector<Run> fadj_;                   // per node: its live faces (only live nodes' runs are kept up to date)
@@ -452,7 +455,13 @@ void Analysis::reinsert_edges_of(Index v) {
 
 Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& st) {
   if (locked_[a] || locked_[b]) return Verdict::kLocked;
-  if (std::max(height_[a], height_[b]) + 1 > opt_.max_depth) return Verdict::kDepth;
+  // The depth limit, and the bits of a node key: depth + 1 + the tree-id bits of the roots left at the end
+  // (at most the vertices after this collapse) must fit in 64, or finish() refuses the whole hierarchy.
+  {
+    const int height = std::max(height_[a], height_[b]) + 1;
+    const int tree_bits = alive_vertices_ > 2 ? static_cast<int>(std::bit_width(alive_vertices_ - 2)) : 0;
+    if (height > opt_.max_depth || height > 63 - tree_bits) return Verdict::kDepth;
+  }
   // Faces on the edge: fl has a->b, fr has b->a (from a's point of view; swapped later as needed).
   st = Step{};
   Index& fl = st.fl;
@@ -683,7 +692,10 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   bound.error = std::max({bound.error, raw_.bounds[na].error, raw_.bounds[nb].error});
   raw_.bounds.push_back(bound);
   raw_.positions.push_back(to_object(pl.p));
-  if (colors_) raw_.colors.push_back(glm::vec3(pl.color / (opt_.color_weight > 0 ? opt_.color_weight : 1.0)));
+  // The 6-D minimiser extrapolates colours; a node's colour stays within the input's colour range (written
+  // meshes must have colours in [0, 1]).
+  if (colors_)
+    raw_.colors.push_back(glm::clamp(glm::vec3(pl.color / (opt_.color_weight > 0 ? opt_.color_weight : 1.0)), color_lo_, color_hi_));
   raw_.records.push_back(rec);
 
   // Neighbours that had an edge rejected get their edges re-examined: their neighbourhood just changed.
@@ -770,7 +782,9 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   Box3 box;
   for (const glm::vec3& p : in_.positions) box.add(p);
   center_ = glm::dvec3(box.center());
-  scale_ = std::max(1e-30, static_cast<double>(box.diagonal()));
+  // In double: the float diagonal overflows once the box spans ~1.8e19, which made every unit position 0
+  // and rejected every collapse (a hierarchy of no collapse, and no error).
+  scale_ = std::max(1e-30, glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo)));
   colors_ = opt_.use_colors && !in_.colors.empty();
   lt_ = opt_.cost == CollapseCost::kLindstromTurk && !colors_;
   volume_ = opt_.preserve_volume && !lt_ && !colors_;
@@ -799,6 +813,9 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     aq_.assign(nl_, AttributeQuadric{});
     ucol_.resize(nl_);
     for (std::size_t v = 0; v < nl_; ++v) ucol_[v] = glm::dvec3(in_.colors[v]) * opt_.color_weight;
+    color_lo_ = glm::vec3(std::numeric_limits<float>::max());
+    color_hi_ = glm::vec3(std::numeric_limits<float>::lowest());
+    for (const glm::vec3& c : in_.colors) color_lo_ = glm::min(color_lo_, c), color_hi_ = glm::max(color_hi_, c);
   }
   init_faces();
   // Quadrics: area-weighted face planes plus border constraints (GH97). The sums are those of one loop over
@@ -902,12 +919,12 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     }
     for (Index v = 0; v < nl_; ++v) {
       const glm::vec3 pv = in_.positions[v];
-      float r2 = 0.0f;
+      double r2 = 0.0;  // in double: |d|^2 overflows float for edges past ~1.8e19
       glm::vec3 sum(0.0f);
       float count = 0.0f;
       for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
         for (int k = 0; k < 3; ++k) {
-          const glm::vec3 d = in_.positions[cur_[3 * *it + k]] - pv;
+          const glm::dvec3 d = glm::dvec3(in_.positions[cur_[3 * *it + k]]) - glm::dvec3(pv);
           r2 = std::max(r2, glm::dot(d, d));
         }
         sum += glm::vec3(unit[*it]);
@@ -938,7 +955,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
           if (lo > 2e-6f) cone = {axis, lo - 1e-6f};
         }
       }
-      raw_.bounds[v] = ElementBound{pv, std::sqrt(r2), 0.0f, cone};
+      raw_.bounds[v] = ElementBound{pv, static_cast<float>(std::sqrt(r2)), 0.0f, cone};
     }
   }
 

@@ -104,7 +104,7 @@ TEST(PmCli, BadInputIsNamed) {
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --cost fast", "--cost: unknown 'fast'"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --colors", "has no vertex colours"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error nan", "--max-error must be"},
-      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error -2", "--max-error must be"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error -2", "--max-error: must be >= 0"},
       {"pm query " + b.vmh.string() + " -o " + out, "give --error E, --camera ... or --budget N"},
       {"pm query " + b.vmh.string() + " --error 1 --scheme fast -o " + out, "--scheme: unknown 'fast'"},
       {"pm query " + b.vmh.string() + " --error nan -o " + out, "--error must be"},

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "multitri/heightfield.hpp"
+#include "multitri/image.hpp"
 #include "multitri/terrain_gen.hpp"
 #include "apps/cli_support.hpp"
 #include "test_support.hpp"
@@ -249,6 +250,82 @@ TEST(Robustness, PointSizedMeshGetsAPicture) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out));
   EXPECT_TRUE(fs::exists(png));
+}
+
+// Found by a second review (each failed before its fix).
+
+// A failed --png used to remove the mesh it had just renamed over the user's existing file: the old file
+// was lost. Now the mesh is staged and moved into place only after the picture is written.
+TEST(Robustness, AFailedPictureKeepsTheUsersExistingMesh) {
+  const auto dir = testing::scratch_dir("robust_keep_existing");
+  const fs::path field = write_small_terrain(dir);
+  const fs::path keep = dir / "keep.obj";
+  std::ofstream(keep) << "precious\n";
+  fs::create_directories(dir / "folder.png");  // a folder where the picture should go
+  for (const std::string& png : {(dir / "missing" / "x.png").string(), (dir / "folder.png").string()}) {
+    const CmdResult r = run("terrain " + field.string() + " --raw-size 17,17 --error 1 -o " + keep.string() + " --png " + png, dir);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    std::ifstream in(keep);
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line, "precious") << png;
+  }
+  for (const auto& e : fs::directory_iterator(dir))  // no staging file left behind
+    EXPECT_EQ(e.path().filename().string().find(".partial-"), std::string::npos) << e.path();
+}
+
+// A failed compare took back the files it had overwritten (an earlier run's pictures), deleted a dangling
+// symbolic link given as --out, and left the parents it had created.
+TEST(Robustness, AFailedCompareLeavesTheOutputFolderAsItWas) {
+  const auto dir = testing::scratch_dir("robust_compare_rollback");
+  const fs::path out = dir / "out";
+  fs::create_directories(dir / "nodata");  // an empty data folder: the cases are generated
+  CmdResult r = run("compare --quick --quiet --panel 64 --cases cow --data " + (dir / "nodata").string() + " --out " + out.string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto size_before = fs::file_size(out / "cow_schemes.png");
+  std::ofstream(dir / "bad.png") << "not a png";
+  r = run("compare --quick --quiet --panel 128 --cases cow,image --image " + (dir / "bad.png").string() + " --data " +
+              (dir / "nodata").string() + " --out " + out.string(),
+          dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(fs::exists(out / "cow_schemes.png"));
+  EXPECT_EQ(fs::file_size(out / "cow_schemes.png"), size_before);  // the earlier run's picture, untouched
+  EXPECT_TRUE(fs::exists(out / "table.md"));
+  for (const auto& e : fs::directory_iterator(out)) EXPECT_NE(e.path().filename().string().rfind(".varmesh-compare", 0), 0u) << e.path();
+  // A dangling link as --out is the user's: refused, not deleted.
+  fs::create_symlink(dir / "nowhere", dir / "dangling");
+  r = run("compare --quick --quiet --cases cow --out " + (dir / "dangling").string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "dangling")));
+  // Folders this run made are taken back, parents included.
+  r = run("compare --quick --quiet --cases image --image " + (dir / "bad.png").string() + " --out " + (dir / "new_a" / "new_b").string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "new_a"));
+}
+
+// render --eye/--target measured the near and far planes from the target, so a target away from the mesh
+// clipped it all (a white picture); a top view with the default +z up was refused; an unreferenced vertex
+// far away framed an empty picture.
+TEST(Robustness, RenderSeesTheMeshFromAnyCamera) {
+  const auto dir = testing::scratch_dir("robust_render_cameras");
+  std::ofstream(dir / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  std::ofstream(dir / "unref.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1000 1000 1000\nf 1 2 3\n";
+  const fs::path png = dir / "r.png";
+  auto covered = [&](const std::string& args) {
+    const CmdResult r = run(args + " -o " + png.string() + " --width 64 --height 48", dir);
+    EXPECT_EQ(r.status, 0) << args << "\n" << r.err;
+    if (r.status != 0) return std::size_t{0};
+    const Image im = read_png(png.string());
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < im.pixels.size(); i += 3)
+      n += im.pixels[i] != 255 || im.pixels[i + 1] != 255 || im.pixels[i + 2] != 255;
+    return n;
+  };
+  const std::string tri = "render " + (dir / "tri.obj").string();
+  EXPECT_GT(covered(tri + " --eye 0.3,-3,1 --target 0.3,-2.9,0.97"), 50u);  // target well in front of the mesh
+  EXPECT_GT(covered(tri + " --eye 0.3,0.3,5 --target 0.3,0.3,0"), 50u);      // straight down
+  EXPECT_GT(covered("render " + (dir / "unref.obj").string()), 50u);
 }
 
 }  // namespace

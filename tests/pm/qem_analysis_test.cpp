@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <vector>
 
@@ -431,6 +432,72 @@ TEST(QemAnalysis, DirtySharedMeshes) {
       EXPECT_LT(h.base_faces().size(), m.num_faces() / 2) << rel;
     }
   }
+}
+
+// Found by a review (each failed before its fix).
+
+// A model wider than ~1.8e19: the float diagonal overflowed, every unit position became 0 and every collapse
+// was refused as a flip (a hierarchy of no collapse, and no error).
+TEST(QemAnalysis, HugeModelsAreSimplifiedLikeSmallOnes) {
+  const TriMesh unit = testing::make_icosphere(2);
+  for (const float scale : {1.0f, 1e19f, 1e20f}) {
+    TriMesh m = unit;
+    for (glm::vec3& p : m.positions) p *= scale;
+    QemOptions o;
+    o.target_faces = m.num_faces() / 4;
+    QemStats st;
+    const VertexHierarchy h = build_vertex_hierarchy(m, o, &st);
+    h.validate();
+    EXPECT_LE(h.base_faces().size(), m.num_faces() / 4) << "scale " << scale;
+    EXPECT_GT(st.collapses, m.num_vertices() / 2) << "scale " << scale;
+  }
+}
+
+// The depth limit ignored the bits the tree ids need: with max_depth 62 a chain of collapses and a few
+// separate triangles made a tree whose keys needed 68 bits, and finish() refused the whole hierarchy.
+TEST(QemAnalysis, DepthLeavesRoomForTheTreeIds) {
+  TriMesh m;  // an open fan whose rim is a spiral of growing spacing: the collapses chain up
+  m.positions.push_back({0, 0, 0});
+  double rad = 1.0;
+  const int n = 300;
+  for (int i = 0; i <= n; ++i, rad *= 1.08)
+    m.positions.push_back(glm::vec3(float(rad * std::cos(0.5 * i)), float(rad * std::sin(0.5 * i)), float(0.1 * rad)));
+  for (int i = 1; i <= n; ++i) m.indices.insert(m.indices.end(), {0, Index(i), Index(i + 1)});
+  for (int t = 0; t < 8; ++t) {
+    const Index b = Index(m.positions.size());
+    m.positions.insert(m.positions.end(), {{float(t), 0, -5}, {float(t) + 0.5f, 0, -5}, {float(t), 0.5f, -5}});
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2});
+  }
+  for (const CollapseCost cost : {CollapseCost::kLindstromTurk, CollapseCost::kQuadric}) {
+    QemOptions o;
+    o.max_depth = 62;
+    o.cost = cost;
+    VertexHierarchy h;
+    ASSERT_NO_THROW(h = build_vertex_hierarchy(m, o));
+    h.validate();
+    const int tree_bits = h.num_roots() <= 1 ? 0 : static_cast<int>(std::bit_width(h.num_roots() - 1));
+    EXPECT_LE(h.max_depth() + 1 + tree_bits, 64);
+  }
+}
+
+// The colour quadric's minimiser extrapolates: node colours left [0, 1] and `pm query` could not write
+// the coarse meshes of a coloured hierarchy.
+TEST(QemAnalysis, NodeColoursStayInTheInputsRange) {
+  TriMesh m = testing::make_icosphere(3);
+  m.colors.resize(m.num_vertices());
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+    const glm::vec3& p = m.positions[v];
+    m.colors[v] = glm::vec3(p.x > 0.3f ? 1.0f : 0.0f, 0.5f + 0.5f * p.y, p.z > 0.0f ? 0.9f : 0.1f);  // sharp edges
+  }
+  QemOptions o;
+  o.use_colors = true;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o);
+  ASSERT_TRUE(h.has_colors());
+  for (std::size_t v = 0; v < h.num_nodes(); ++v)
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GE(h.colors()[v][k], 0.0f) << "node " << v;
+      EXPECT_LE(h.colors()[v][k], 1.0f) << "node " << v;
+    }
 }
 
 }  // namespace
