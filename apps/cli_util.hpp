@@ -61,6 +61,27 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info = nullptr);
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture);
 
+/// An output folder written all or nothing: files go to a staging folder inside it (path()) and are moved
+/// into the folder by commit(). Without commit() - an exception on the way - the destructor removes the
+/// staging folder and the folders this object created (the output folder and missing parents), so the
+/// folder is left as it was, files of earlier runs included. Throws IoError naming the folder when it
+/// cannot be created.
+class StagedFolder {
+ public:
+  explicit StagedFolder(const std::string& folder);
+  ~StagedFolder();
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+  /// Where to write `name` now; the name is remembered for commit().
+  std::string path(const std::string& name);
+  void commit();
+
+ private:
+  std::string folder_, stage_;
+  std::vector<std::string> made_, names_;
+  bool committed_ = false;
+};
+
 /// Wall-clock stopwatch in milliseconds.
 class Stopwatch {
  public:

@@ -173,6 +173,55 @@ void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, c
   }
 }
 
+StagedFolder::StagedFolder(const std::string& folder) : folder_(folder) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  // symlink_status: a dangling link is the user's, not a folder to make (or to take back).
+  for (fs::path p = fs::absolute(folder).lexically_normal(); !p.empty(); p = p.parent_path()) {
+    if (fs::exists(fs::symlink_status(p, ec))) break;
+    made_.push_back(p.string());
+    if (p == p.parent_path()) break;
+  }
+  try {
+    fs::create_directories(folder);
+    stage_ = (fs::path(folder) / (".varmesh-partial-" + std::to_string(::getpid()))).string();
+    fs::create_directory(stage_);
+  } catch (const fs::filesystem_error& e) {
+    for (const std::string& p : made_) fs::remove(p, ec);
+    throw IoError(folder, e.code().message());
+  }
+}
+
+StagedFolder::~StagedFolder() {
+  if (committed_) return;
+  std::error_code ec;
+  std::filesystem::remove_all(stage_, ec);
+  for (const std::string& p : made_) std::filesystem::remove(p, ec);  // deepest first; only if empty
+}
+
+std::string StagedFolder::path(const std::string& name) {
+  names_.push_back(name);
+  return (std::filesystem::path(stage_) / name).string();
+}
+
+void StagedFolder::commit() {
+  namespace fs = std::filesystem;
+  // What would stop a move is looked for before the first move, so that nothing is moved when one cannot be.
+  for (const std::string& name : names_) {
+    std::error_code ec;
+    if (fs::is_directory(fs::symlink_status(fs::path(folder_) / name, ec)))
+      throw IoError((fs::path(folder_) / name).string(), "is a folder: the file cannot be put there");
+  }
+  for (const std::string& name : names_) {
+    std::error_code ec;
+    fs::rename(fs::path(stage_) / name, fs::path(folder_) / name, ec);
+    if (ec) throw IoError((fs::path(folder_) / name).string(), "cannot move the written file into place: " + ec.message());
+  }
+  std::error_code ec;
+  fs::remove(stage_, ec);
+  committed_ = true;
+}
+
 Step::Step(const char* what, bool quiet) : what_(what), quiet_(quiet) {
   if (!quiet_) std::fprintf(stderr, "[varmesh] %s ...\n", what_);
 }

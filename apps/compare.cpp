@@ -18,8 +18,6 @@
 #include <unordered_map>
 #include <vector>
 
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
@@ -295,8 +293,7 @@ struct Options {
   fs::path out;
   // Files are written into a staging folder inside `out` and moved into `out` when the whole run has
   // succeeded: a failed run leaves `out` as it was, earlier results included (no partial output).
-  fs::path stage;
-  mutable std::vector<std::string> written;  // names, in the staging folder
+  StagedFolder* stage = nullptr;
   std::vector<std::string> cases;
   fs::path data;
   bool data_present = false;
@@ -310,10 +307,9 @@ struct Options {
   bool quick = false, quiet = false;
 };
 
-// write_png into the staging folder, remembered in o.written.
+// write_png into the staging folder (moved into the output folder when the whole run has succeeded).
 void write_output_png(const Options& o, const std::string& name, const Image& image) {
-  write_png((o.stage / name).string(), image);
-  o.written.push_back(name);
+  write_png(o.stage->path(name), image);
 }
 
 const char* cost_name(const Options& o) {
@@ -908,8 +904,7 @@ std::string csv_table(const std::vector<CaseResult>& results) {
 }
 
 void write_text(const Options& o, const std::string& name, const std::string& text) {
-  write_file_atomically((o.stage / name).string(), text);
-  o.written.push_back(name);
+  write_file_atomically(o.stage->path(name), text);
 }
 
 }  // namespace
@@ -934,34 +929,11 @@ static int run_compare_in(const Options& o);
 
 int run_compare(const CompareArgs& args) {
   Options o = parse_options(args);
-  std::error_code ec;
-  // The folders this run makes (the output folder and missing parents), deepest first. symlink_status: a
-  // dangling link is the user's, not something to make or take back.
-  std::vector<fs::path> made;
-  for (fs::path p = fs::absolute(o.out).lexically_normal(); !p.empty(); p = p.parent_path()) {
-    if (fs::exists(fs::symlink_status(p, ec))) break;
-    made.push_back(p);
-    if (p == p.parent_path()) break;
-  }
-  auto take_back = [&] {
-    if (!o.stage.empty()) fs::remove_all(o.stage, ec);
-    for (const fs::path& p : made) fs::remove(p, ec);  // only if still empty
-  };
-  try {
-    fs::create_directories(o.out);
-    o.stage = o.out / (".varmesh-compare-" + std::to_string(::getpid()));
-    fs::create_directory(o.stage);
-    const int status = run_compare_in(o);
-    for (const std::string& name : o.written) fs::rename(o.stage / name, o.out / name);
-    fs::remove(o.stage, ec);
-    return status;
-  } catch (const fs::filesystem_error& e) {
-    take_back();
-    throw IoError(e.path1().empty() ? o.out.string() : e.path1().string(), e.code().message());
-  } catch (...) {
-    take_back();
-    throw;
-  }
+  StagedFolder stage(o.out.string());
+  o.stage = &stage;
+  const int status = run_compare_in(o);
+  stage.commit();
+  return status;
 }
 
 static int run_compare_in(const Options& o) {

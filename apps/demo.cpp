@@ -159,13 +159,14 @@ int run_demo(const DemoArgs& a) {
   }
   {
     Step step("writing OBJ files and PNG pictures", quiet);
-    fs::create_directories(a.out_dir);
-    write_mesh((fs::path(a.out_dir) / "uniform.obj").string(), mu);
-    write_mesh((fs::path(a.out_dir) / "view.obj").string(), mv);
-    write_png((fs::path(a.out_dir) / "uniform.png").string(), uniform_png);
-    write_png((fs::path(a.out_dir) / "view_camera.png").string(), view_png);
-    write_png((fs::path(a.out_dir) / "uniform_topdown.png").string(), uniform_topdown_png);
-    write_png((fs::path(a.out_dir) / "view_topdown.png").string(), view_topdown_png);
+    StagedFolder out(a.out_dir);  // all six files or none (a failed write left the first ones behind)
+    write_mesh(out.path("uniform.obj"), mu);
+    write_mesh(out.path("view.obj"), mv);
+    write_png(out.path("uniform.png"), uniform_png);
+    write_png(out.path("view_camera.png"), view_png);
+    write_png(out.path("uniform_topdown.png"), uniform_topdown_png);
+    write_png(out.path("view_topdown.png"), view_topdown_png);
+    out.commit();
   }
 
   std::printf("terrain %zu x %zu samples, height range %.2f; 4-8 hierarchy built in %.1f ms (%.1f bytes/sample)\n",

@@ -304,6 +304,22 @@ TEST(Robustness, AFailedCompareLeavesTheOutputFolderAsItWas) {
   EXPECT_FALSE(fs::exists(dir / "new_a"));
 }
 
+// demo wrote its six files one after another: a failure on the fourth left the first three behind.
+TEST(Robustness, AFailedDemoWritesNothing) {
+  const auto dir = testing::scratch_dir("robust_demo_all_or_nothing");
+  const fs::path out = dir / "out";
+  fs::create_directories(out / "view_camera.png");  // a folder where a picture should go
+  const CmdResult r = run("demo --quiet --size 17 --out " + out.string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  std::size_t entries = 0;
+  for (const auto& e : fs::directory_iterator(out)) {
+    ++entries;
+    EXPECT_EQ(e.path().filename(), "view_camera.png") << e.path();
+  }
+  EXPECT_EQ(entries, 1u);
+}
+
 // render --eye/--target measured the near and far planes from the target, so a target away from the mesh
 // clipped it all (a white picture); a top view with the default +z up was refused; an unreferenced vertex
 // far away framed an empty picture.
