@@ -491,7 +491,7 @@ CaseInput model_case(const Options& o, const std::string& name) {
       c.source = "generated bumpy icosphere";
     }
   } else {
-    c.mesh = read_mesh(file);
+    c.mesh = read_input_mesh(file);  // coordinates beyond float's reach refused by name, as the other commands do
     c.source = fs::path(file).filename().string();
   }
   c.mesh.normals.clear();

@@ -67,7 +67,12 @@ int run_demo(const DemoArgs& a) {
   std::unique_ptr<Grid48> grid;
   {
     Step step("building the 4-8 hierarchy", quiet);
-    grid = std::make_unique<Grid48>(field);
+    try {
+      grid = std::make_unique<Grid48>(field);
+    } catch (const InvalidInput& e) {
+      if (a.heightfield.empty()) throw;
+      throw IoError(a.heightfield, e.what());  // name the file (e.g. fewer than 2 x 2 samples)
+    }
   }
   const double build_ms = build_watch.ms();
 

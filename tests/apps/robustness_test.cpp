@@ -304,6 +304,30 @@ TEST(Robustness, AFailedCompareLeavesTheOutputFolderAsItWas) {
   EXPECT_FALSE(fs::exists(dir / "new_a"));
 }
 
+// Messages that named neither the file nor the option.
+TEST(Robustness, TerrainErrorsNameTheirFileOrOption) {
+  const auto dir = testing::scratch_dir("robust_terrain_names");
+  const fs::path thin = dir / "thin.pgm";
+  std::ofstream(thin, std::ios::binary) << "P5\n1 5\n255\n" << std::string(5, '\x10');
+  const fs::path field = write_small_terrain(dir);
+  const std::string out = (dir / "out.obj").string();
+  const struct {
+    std::string args, names;
+  } cases[] = {
+      {"terrain " + thin.string() + " --error 1 -o " + out, thin.string()},
+      {"demo --quiet --heightfield " + thin.string() + " --out " + (dir / "d").string(), thin.string()},
+      {"terrain " + field.string() + " --raw-size 17,17 --error 1 --spacing inf -o " + out, "--spacing"},
+      {"terrain " + field.string() + " --raw-size 17,17 --error 1 --z-scale nan -o " + out, "--z-scale"},
+  };
+  for (const auto& c : cases) {
+    const CmdResult r = run(c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.names)) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // demo wrote its six files one after another: a failure on the fourth left the first three behind.
 TEST(Robustness, AFailedDemoWritesNothing) {
   const auto dir = testing::scratch_dir("robust_demo_all_or_nothing");
