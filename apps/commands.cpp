@@ -1,5 +1,6 @@
 #include "apps/commands.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -294,8 +295,14 @@ int cmd_terrain(const TerrainArgs& a) {
     cam.fov_y_deg = c[6];
     if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
     if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
-    cam.z_near = 0.1f * a.spacing;
-    cam.z_far = 1e7f;
+    // Near and far planes from the terrain's own size (a fixed far plane of 1e7 made the answer depend on
+    // the units: the same scene scaled by 1e5 lost triangles).
+    const glm::vec3 lo(0.0f, 0.0f, *std::min_element(field.z.begin(), field.z.end()));
+    const glm::vec3 hi(float(field.width - 1) * a.spacing, float(field.height - 1) * a.spacing,
+                       *std::max_element(field.z.begin(), field.z.end()));
+    const float reach = glm::length(cam.eye - 0.5f * (lo + hi)) + glm::length(hi - lo);
+    cam.z_near = std::min(0.1f * a.spacing, 1e-3f * reach);
+    cam.z_far = std::max(2.0f * reach, 10.0f * cam.z_near);
     if (!(a.pixels > 0.0f) || !std::isfinite(a.pixels) || !(a.viewport > 0.0f) || !std::isfinite(a.viewport))
       throw InvalidInput("terrain: --pixels and --viewport must be finite and > 0");
     parts.push_back(Criterion::outside_frustum(cam.frustum()));
@@ -427,6 +434,7 @@ int run(int argc, char** argv) {
   demo->add_option("--error", da.error, "uniform mesh: max vertical error (default 0.5% of the height range)")->check(check_non_negative);
   demo->add_option("--pixels", da.pixels, "view-dependent mesh: screen-space error in pixels (default 1)")->check(check_positive);
   demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain");
+  demo->add_option("--raw-size", da.raw_size, "W,H: the size of a headerless .raw/.f32 --heightfield");
   demo->add_flag("--quiet", da.quiet, "no progress on stderr");
 
   BuildArgs ba;

@@ -56,7 +56,9 @@ int run_demo(const DemoArgs& a) {
     if (a.heightfield.empty()) {
       field = make_fractal_terrain(a.size, a.size, 2026, 0.18f * float(a.size));
     } else {
-      field = read_heightfield(a.heightfield);
+      HeightFieldReadOptions ro;
+      apply_raw_size(a.raw_size, ro);
+      field = read_heightfield(a.heightfield, ro);
     }
   }
   const auto [zmin, zmax] = std::minmax_element(field.z.begin(), field.z.end());

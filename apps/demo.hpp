@@ -11,6 +11,7 @@ struct DemoArgs {
   float error = -1.0f;   ///< < 0: 0.5 % of the height range
   float pixels = 1.0f;
   std::string heightfield;  ///< optional input instead of the generated terrain
+  std::string raw_size;     ///< W,H of a headerless .raw/.f32 height field (as terrain --raw-size)
   bool quiet = false;
 };
 

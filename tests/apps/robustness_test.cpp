@@ -8,6 +8,7 @@
 
 #include "multitri/heightfield.hpp"
 #include "multitri/image.hpp"
+#include "multitri/mesh_io.hpp"
 #include "multitri/terrain_gen.hpp"
 #include "apps/cli_support.hpp"
 #include "test_support.hpp"
@@ -326,6 +327,26 @@ TEST(Robustness, TerrainErrorsNameTheirFileOrOption) {
     EXPECT_TRUE(contains(r.err, c.names)) << c.args << "\n" << r.err;
   }
   EXPECT_FALSE(fs::exists(out));
+}
+
+// The view-dependent terrain used a fixed far plane (1e7): the same scene in other units gave another mesh.
+// And demo could not take a headerless height field (no --raw-size).
+TEST(Robustness, TerrainViewsDoNotDependOnUnitsAndDemoTakesRawFields) {
+  const auto dir = testing::scratch_dir("robust_terrain_units");
+  const fs::path field = dir / "t.f32";
+  write_heightfield_raw(field.string(), make_fractal_terrain(65, 65, 5, 20.0f));
+  auto faces = [&](const std::string& args) {
+    const fs::path out = dir / "o.obj";
+    const CmdResult r = run("terrain " + field.string() + " --raw-size 65,65 " + args + " -o " + out.string(), dir);
+    EXPECT_EQ(r.status, 0) << args << "\n" << r.err;
+    return r.status == 0 ? read_mesh(out.string()).num_faces() : 0;
+  };
+  const std::size_t unit = faces("--camera 32,-40,40,32,32,0,50");
+  EXPECT_GT(unit, 100u);
+  EXPECT_EQ(faces("--spacing 1e5 --z-scale 1e5 --camera 3.2e6,-4e6,4e6,3.2e6,3.2e6,0,50"), unit);
+  const CmdResult r = run("demo --quiet --heightfield " + field.string() + " --raw-size 65,65 --out " + (dir / "d").string(), dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "d" / "view.obj"));
 }
 
 // demo wrote its six files one after another: a failure on the fourth left the first three behind.
