@@ -61,11 +61,13 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info = nullptr);
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture);
 
-/// An output folder written all or nothing: files go to a staging folder inside it (path()) and are moved
-/// into the folder by commit(). Without commit() - an exception on the way - the destructor removes the
-/// staging folder and the folders this object created (the output folder and missing parents), so the
-/// folder is left as it was, files of earlier runs included. Throws IoError naming the folder when it
-/// cannot be created.
+/// An output folder written all or nothing: files go to a staging folder inside it (path(), a fresh name
+/// per object) and are moved into the folder by commit(). Without commit() - an exception on the way - the
+/// destructor removes the staging folder and the folders this object created (the output folder and
+/// missing parents), so the folder is left as it was, files of earlier runs included. commit() first checks
+/// that no target is a folder; a rename that still fails (e.g. a target owned by another user in a sticky
+/// folder) throws with the files moved so far in place. Throws IoError naming the folder when it cannot be
+/// created.
 class StagedFolder {
  public:
   explicit StagedFolder(const std::string& folder);

@@ -185,8 +185,16 @@ StagedFolder::StagedFolder(const std::string& folder) : folder_(folder) {
   }
   try {
     fs::create_directories(folder);
-    stage_ = (fs::path(folder) / (".varmesh-partial-" + std::to_string(::getpid()))).string();
-    fs::create_directory(stage_);
+    // A name no one else uses: a folder left by a killed run (same pid in a container) is not ours to fill
+    // or to remove.
+    const unsigned long long salt =
+        static_cast<unsigned long long>(std::chrono::steady_clock::now().time_since_epoch().count());
+    for (unsigned attempt = 0; stage_.empty(); ++attempt) {
+      const fs::path p = fs::path(folder) / (".varmesh-partial-" + std::to_string(::getpid()) + "-" +
+                                             std::to_string((salt + attempt) % 1000000007ull));
+      if (fs::create_directory(p)) stage_ = p.string();
+      else if (attempt > 100) throw IoError(folder, "cannot make a staging folder in it");
+    }
   } catch (const fs::filesystem_error& e) {
     for (const std::string& p : made_) fs::remove(p, ec);
     throw IoError(folder, e.code().message());
@@ -196,7 +204,7 @@ StagedFolder::StagedFolder(const std::string& folder) : folder_(folder) {
 StagedFolder::~StagedFolder() {
   if (committed_) return;
   std::error_code ec;
-  std::filesystem::remove_all(stage_, ec);
+  if (!stage_.empty()) std::filesystem::remove_all(stage_, ec);
   for (const std::string& p : made_) std::filesystem::remove(p, ec);  // deepest first; only if empty
 }
 

@@ -293,7 +293,7 @@ TEST(Robustness, AFailedCompareLeavesTheOutputFolderAsItWas) {
   EXPECT_TRUE(fs::exists(out / "cow_schemes.png"));
   EXPECT_EQ(fs::file_size(out / "cow_schemes.png"), size_before);  // the earlier run's picture, untouched
   EXPECT_TRUE(fs::exists(out / "table.md"));
-  for (const auto& e : fs::directory_iterator(out)) EXPECT_NE(e.path().filename().string().rfind(".varmesh-compare", 0), 0u) << e.path();
+  for (const auto& e : fs::directory_iterator(out)) EXPECT_NE(e.path().filename().string().rfind(".varmesh-partial", 0), 0u) << e.path();
   // A dangling link as --out is the user's: refused, not deleted.
   fs::create_symlink(dir / "nowhere", dir / "dangling");
   r = run("compare --quick --quiet --cases cow --out " + (dir / "dangling").string(), dir);
