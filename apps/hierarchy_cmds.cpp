@@ -137,6 +137,29 @@ Image query_picture(const TriMesh& mesh, const ViewQueryArgs& a) {
   return render_mesh(mesh, chosen_camera(mesh, a.up, a.view), o);
 }
 
+// The common end of query and pm query: the query of `parts` (all of them; none: the finest mesh) under
+// --budget, extracted on `front`, and its mesh written with its --png (both or neither).
+struct Extracted {
+  QueryStats stats;
+  TriMesh mesh;
+  double ms = 0.0;
+};
+template <class Front>
+Extracted extract_and_write(Front& front, const std::vector<Criterion>& parts, const ViewQueryArgs& a) {
+  Query q;
+  q.criterion = parts.empty() ? Criterion::object_error(0.0f) : parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
+  q.triangle_budget = a.budget;
+  Extracted r;
+  Stopwatch watch;
+  r.stats = extract(front, q);
+  r.ms = watch.ms();
+  r.mesh = front.to_mesh();
+  // The picture is rendered before anything is written, so a bad --png, --up or --view leaves no file.
+  const Image picture = query_picture(r.mesh, a);
+  write_mesh_and_picture(a.output, r.mesh, a.png, a.png.empty() ? nullptr : &picture);
+  return r;
+}
+
 // The pictures of `--pictures`, rendered as the build goes and written once the hierarchy is: a failed run
 // leaves neither the hierarchy nor pictures.
 struct Picture {
@@ -285,17 +308,8 @@ int run_query(const QueryArgs& a) {
       return 2.0f * b.radius <= s0 + t * (s1 - s0);
     }));
   }
-  Query q;
-  q.criterion = parts.empty() ? Criterion::object_error(0.0f) : parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
-  q.triangle_budget = a.budget;
   MtFront front(mt);
-  Stopwatch watch;
-  const QueryStats st = extract(front, q);
-  const double ms = watch.ms();
-  const TriMesh mesh = front.to_mesh();
-  // The picture is rendered before anything is written, so a bad --png, --up or --view leaves no file.
-  const Image picture = query_picture(mesh, a);
-  write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
+  const auto [st, mesh, ms] = extract_and_write(front, parts, a);
   std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
               st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
   return 0;
@@ -351,16 +365,8 @@ int run_pm_query(const PmQueryArgs& a) {
   std::vector<Criterion> parts;
   add_error_and_camera_criteria(a.error, a.camera, a.pixels, a.viewport, parts);
   const VertexHierarchy h = read_vertex_hierarchy(a.input);
-  Query q;
-  q.criterion = parts.empty() ? Criterion::object_error(0.0f) : parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
-  q.triangle_budget = a.budget;
   SrMesh sr(h, scheme);
-  Stopwatch watch;
-  const QueryStats st = extract(sr, q);
-  const double ms = watch.ms();
-  const TriMesh mesh = sr.to_mesh();
-  const Image picture = query_picture(mesh, a);
-  write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
+  const auto [st, mesh, ms] = extract_and_write(sr, parts, a);
   const SrStats& s = sr.stats();
   std::printf("%s: %zu vertices, %zu triangles (%zu vsplits, %zu forced, %zu ecols, %zu forced, #DC %zu%s) in %.2f ms -> %s\n",
               scheme_name(scheme), mesh.num_vertices(), mesh.num_faces(), s.vsplits, s.forced_vsplits, s.ecols,
