@@ -410,9 +410,9 @@ int run(int argc, char** argv) {
   terrain->add_option("HEIGHTFIELD", ta.input, "height field: .pgm, .png, .raw/.f32 (float32 LE, give --raw-size)")->required();
   terrain->add_option("-o,--output", ta.output, "output mesh (.obj, .ply, .off)")->required();
   terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample")->check(CLI::NonNegativeNumber);
-  terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)");
-  terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive);
-  terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive);
+  auto* terrain_camera = terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)");
+  terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(terrain_camera);
+  terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(terrain_camera);
   terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)")->check(CLI::NonNegativeNumber);
   terrain->add_option("--z-scale", ta.z_scale, "multiply heights by this factor");
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");

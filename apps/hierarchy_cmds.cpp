@@ -49,9 +49,9 @@ void add_view_query_options(CLI::App& sub, ViewQueryArgs& a, const char* hierarc
   sub.add_option("HIERARCHY", a.input, hierarchy)->required();
   sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off)")->required();
   sub.add_option("--error", a.error, "largest node error allowed (object units)")->check(check_non_negative);
-  sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive);
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive);
+  auto* camera = sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(camera);
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(camera);
   sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
   sub.add_option("--png", a.png, "also render the result to this PNG");
   sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");

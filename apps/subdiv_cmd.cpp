@@ -452,9 +452,9 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
                "build the Multi-Triangulation of the binary steps and extract a front (primal schemes)");
   sub.add_option("--error", a.error, "with --adaptive: largest node error (object units; 0 = refine wherever anything moves)")
       ->check(check_non_negative);
-  sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive);
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive);
+  auto* camera = sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(camera);
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(camera);
   sub.add_option("--png", a.png, "also render the result to this PNG (flat shading, polygon edges)");
   sub.add_option("--figure", a.figure,
                  "write every scheme on INPUT into this folder (one PNG each, same camera, plus a grid): "

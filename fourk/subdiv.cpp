@@ -187,7 +187,8 @@ SubdivTopology refine_subdiv_topology(const SubdivTopology& p, bool with_edges) 
   const Index* pfe = p.face_edges.data();
   Index* cfv = c.face_verts.data();
   Index* cfe = c.face_edges.data();
-  Index* cev = c.edge_verts.data() + 2 * std::size_t{inner_base};
+  // Without edges the child's edge arrays are empty: no offset is formed into them (null + n is undefined).
+  Index* cev = with_edges ? c.edge_verts.data() + 2 * std::size_t{inner_base} : nullptr;
   for (Index f = 0; f < nf; ++f) {
     const Index off = quads ? 4 * f : p.face_offsets[f], k = quads ? 4 : p.face_offsets[f + 1] - off;
     const Index fpoint = nv + f;

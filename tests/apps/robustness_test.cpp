@@ -219,6 +219,27 @@ TEST(Robustness, NonPositivePixelsAreRejectedByName) {
   EXPECT_FALSE(fs::exists(dir / "demo"));
 }
 
+// --pixels and --viewport only tune the camera's screen-space error: without --camera they were accepted
+// and silently ignored, so `terrain --error 1 --pixels 2` looked like it had asked for a screen criterion.
+TEST(Robustness, ScreenOptionsWithoutCameraAreRefused) {
+  const auto dir = testing::scratch_dir("robust_pixels_no_camera");
+  const fs::path field = write_small_terrain(dir);
+  const std::string out = (dir / "out.obj").string();
+  for (const std::string opt : {"--pixels 2", "--viewport 720"}) {
+    const CmdResult r = run("terrain " + field.string() + " --raw-size 17,17 --error 1 " + opt + " -o " + out, dir);
+    EXPECT_EQ(r.status, 1) << opt << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << opt << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, opt.substr(0, opt.find(' ')))) << r.err;
+    EXPECT_TRUE(contains(r.err, "--camera")) << r.err;
+    // The same option with a camera is accepted.
+    const CmdResult ok =
+        run("terrain " + field.string() + " --raw-size 17,17 --camera 8,-20,30,8,8,0,60 " + opt + " -o " + out, dir);
+    EXPECT_EQ(ok.status, 0) << opt << "\n" << ok.err;
+    fs::remove(out);
+  }
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // Coordinates near float's limit are finite, but every length computed from them overflows: the commands
 // failed deep inside ("frame_sphere: radius inf", "FourKMesh::set_error ... must be finite") without naming
 // the file or the cause.

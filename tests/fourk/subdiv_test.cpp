@@ -224,6 +224,33 @@ TEST(Subdiv, TopologyInvariantsAtEveryStep) {
   }
 }
 
+// keep_last_edges = false (what the benchmark runs) drops only the last level's edges: faces, valences,
+// border flags and positions equal those of the default run.
+TEST(Subdiv, DroppingTheLastEdgesKeepsEverythingElse) {
+  SubdivOptions no_edges;
+  no_edges.keep_last_edges = false;
+  for (const PolyMesh& base : test_meshes()) {
+    for (int steps : {0, 2, 4}) {
+      for (SubdivScheme scheme : {SubdivScheme::kCatmullClark, SubdivScheme::kFourEight}) {
+        const SubdivMesh full = subdivide(base, scheme, steps);
+        const SubdivMesh lean = subdivide(base, scheme, steps, no_edges);
+        EXPECT_EQ(lean.topo.face_verts, full.topo.face_verts) << "steps " << steps;
+        EXPECT_EQ(lean.topo.valence, full.topo.valence) << "steps " << steps;
+        EXPECT_EQ(lean.topo.vertex_border, full.topo.vertex_border) << "steps " << steps;
+        EXPECT_EQ(lean.positions, full.positions) << "steps " << steps;
+        if (steps > 0) {
+          EXPECT_FALSE(lean.topo.has_edges());
+        }
+        EXPECT_NO_THROW(lean.to_tri_mesh().validate());
+      }
+    }
+    // An odd step count ends on a diagonal step, which needs the edges of the level before: they stay.
+    const SubdivMesh odd = subdivide(base, SubdivScheme::kFourEight, 3, no_edges);
+    EXPECT_TRUE(odd.topo.has_edges());
+    EXPECT_EQ(odd.to_poly_mesh().corners, subdivide(base, SubdivScheme::kFourEight, 3).to_poly_mesh().corners);
+  }
+}
+
 TEST(Subdiv, FacesQuadrupleEveryTwoSteps) {
   const PolyMesh cube = make_quad_cube();
   for (int steps = 0; steps <= 8; steps += 2) {
