@@ -1,6 +1,7 @@
 #include "multitri/mt.hpp"
 
 #include <algorithm>
+#include <array>
 #include <limits>
 #include <iterator>
 #include <cmath>
@@ -30,10 +31,11 @@ std::uint64_t edge_key(VertexId a, VertexId b) { return (std::uint64_t(a) << 32)
 
 // Oriented boundary of a face set: directed edges whose reverse is not in the set (counted with
 // multiplicity), plus the undirected interior edges. Both sorted.
+// `directed` is scratch space (kept by the caller so that a node costs no allocation).
 void boundary_and_interior(const std::vector<Index>& corners, std::span<const FaceId> faces,
-                           std::vector<std::uint64_t>& boundary, std::vector<std::uint64_t>& interior) {
-  std::vector<std::uint64_t> directed;
-  directed.reserve(faces.size() * 3);
+                           std::vector<std::uint64_t>& boundary, std::vector<std::uint64_t>& interior,
+                           std::vector<std::uint64_t>& directed) {
+  directed.clear();
   for (FaceId f : faces)
     for (int k = 0; k < 3; ++k)
       directed.push_back(edge_key(corners[3 * f + k], corners[3 * f + (k + 1) % 3]));
@@ -42,7 +44,8 @@ void boundary_and_interior(const std::vector<Index>& corners, std::span<const Fa
   interior.clear();
   for (std::uint64_t e : directed) {
     const auto a = static_cast<VertexId>(e >> 32), b = static_cast<VertexId>(e & 0xffffffffu);
-    if (std::binary_search(directed.begin(), directed.end(), edge_key(b, a))) {
+    // A node's faces are few: a linear scan beats a binary search here.
+    if (std::find(directed.begin(), directed.end(), edge_key(b, a)) != directed.end()) {
       if (a < b) interior.push_back(e);
     } else {
       boundary.push_back(e);
@@ -162,8 +165,39 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
     const Index a = corners_[3 * f], b = corners_[3 * f + 1], c = corners_[3 * f + 2];
     if (a == b || b == c || a == c) fail("creates degenerate face " + std::to_string(f), creator[f]);
   }
-  // Non-redundancy: one vertex triple, one face.
-  {
+  // Non-redundancy: one vertex triple, one face. With vertex ids of at most kCornerBits bits the sorted
+  // triple packs into one word and a sort of words finds any repeat; the slower sort of (triple, face)
+  // then runs only to name the faces (the same pair as without the shortcut), or for wider ids.
+  // The words are bucketed by the smallest vertex first (a counting sort), so only each vertex's few
+  // faces are sorted.
+  bool may_repeat = true;
+  if (positions_.size() <= (std::size_t{1} << Mt::kCornerBits)) {
+    std::vector<Index> bucket(positions_.size() + 1, 0);
+    auto sorted_triple = [&](FaceId f) {
+      Index a = corners_[3 * f], b = corners_[3 * f + 1], c = corners_[3 * f + 2];
+      if (a > b) std::swap(a, b);
+      if (b > c) std::swap(b, c);
+      if (a > b) std::swap(a, b);
+      return std::array<Index, 3>{a, b, c};
+    };
+    for (FaceId f = 0; f < num_faces; ++f) ++bucket[sorted_triple(f)[0] + 1];
+    for (std::size_t v = 0; v + 1 < bucket.size(); ++v) bucket[v + 1] += bucket[v];
+    std::vector<std::uint64_t> rest(num_faces);
+    {
+      std::vector<Index> fill(bucket.begin(), bucket.end() - 1);
+      for (FaceId f = 0; f < num_faces; ++f) {
+        const auto t = sorted_triple(f);
+        rest[fill[t[0]]++] = (std::uint64_t{t[1]} << Mt::kCornerBits) | t[2];
+      }
+    }
+    may_repeat = false;
+    for (std::size_t v = 0; v + 1 < bucket.size() && !may_repeat; ++v) {
+      const auto first = rest.begin() + bucket[v], last = rest.begin() + bucket[v + 1];
+      std::sort(first, last);
+      may_repeat = std::adjacent_find(first, last) != last;
+    }
+  }
+  if (may_repeat) {
     std::vector<std::tuple<Index, Index, Index, FaceId>> keys(num_faces);
     for (FaceId f = 0; f < num_faces; ++f) {
       std::array<Index, 3> v{corners_[3 * f], corners_[3 * f + 1], corners_[3 * f + 2]};
@@ -182,19 +216,28 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
   if (options.check_geometry) {
     // Edges on the border of the whole structure (no face uses them in reverse) may be subdivided: that is
     // how a border split (1 face -> 2) works, and no other face can see the difference.
-    std::vector<std::uint64_t> all_edges;
-    all_edges.reserve(corners_.size());
-    for (std::size_t f = 0; f < num_faces; ++f)
-      for (int k = 0; k < 3; ++k) all_edges.push_back(edge_key(corners_[3 * f + k], corners_[3 * f + (k + 1) % 3]));
-    std::sort(all_edges.begin(), all_edges.end());
+    // The directed edges of all faces by first vertex (a counting sort), built on first use: structures
+    // without borders never need them.
+    std::vector<Index> out_begin, out_end;
     auto on_border = [&](std::uint64_t e) {
-      const std::uint64_t rev = (e << 32) | (e >> 32);
-      return !std::binary_search(all_edges.begin(), all_edges.end(), rev);
+      if (out_begin.empty()) {
+        out_begin.assign(positions_.size() + 1, 0);
+        for (Index v : corners_) ++out_begin[v + 1];
+        for (std::size_t v = 0; v + 1 < out_begin.size(); ++v) out_begin[v + 1] += out_begin[v];
+        out_end.resize(corners_.size());
+        std::vector<Index> fill(out_begin.begin(), out_begin.end() - 1);
+        for (std::size_t f = 0; f < num_faces; ++f)
+          for (std::size_t k = 0; k < 3; ++k) out_end[fill[corners_[3 * f + k]]++] = corners_[3 * f + (k + 1) % 3];
+      }
+      // e = a -> b is on the border when no face has b -> a.
+      const auto a = static_cast<Index>(e >> 32), b = static_cast<Index>(e & 0xffffffffu);
+      const auto first = out_end.begin() + out_begin[b], last = out_end.begin() + out_begin[b + 1];
+      return std::find(first, last, a) == last;
     };
-    std::vector<std::uint64_t> b0, i0, b1, i1, diff;
+    std::vector<std::uint64_t> b0, i0, b1, i1, diff, scratch;
     for (NodeId n = 1; n < num_nodes; ++n) {
-      boundary_and_interior(corners_, removed(n), b0, i0);
-      boundary_and_interior(corners_, created(n), b1, i1);
+      boundary_and_interior(corners_, removed(n), b0, i0, scratch);
+      boundary_and_interior(corners_, created(n), b1, i1, scratch);
       diff.clear();
       std::set_symmetric_difference(b0.begin(), b0.end(), b1.begin(), b1.end(), std::back_inserter(diff));
       for (std::uint64_t e : diff)
@@ -240,15 +283,29 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
   }
 
   // Node graph (parent = creator of a removed face) and a parents-first order (Kahn).
-  std::vector<std::vector<NodeId>> parents(num_nodes), children(num_nodes);
+  // Both as flat arrays (offsets + items): parents of n sorted and distinct, children of p in increasing
+  // node order.
+  std::vector<Index> parent_begin(num_nodes + 1, 0);
+  std::vector<NodeId> parent_items;
+  parent_items.reserve(removed_items_.size());
   for (NodeId n = 1; n < num_nodes; ++n) {
-    for (FaceId f : removed(n)) parents[n].push_back(creator[f]);
-    std::sort(parents[n].begin(), parents[n].end());
-    parents[n].erase(std::unique(parents[n].begin(), parents[n].end()), parents[n].end());
-    for (NodeId p : parents[n]) children[p].push_back(n);
+    const auto at = static_cast<std::ptrdiff_t>(parent_items.size());
+    for (FaceId f : removed(n)) parent_items.push_back(creator[f]);
+    std::sort(parent_items.begin() + at, parent_items.end());
+    parent_items.erase(std::unique(parent_items.begin() + at, parent_items.end()), parent_items.end());
+    parent_begin[n + 1] = static_cast<Index>(parent_items.size());
+  }
+  std::vector<Index> child_begin(num_nodes + 1, 0);
+  for (NodeId p : parent_items) ++child_begin[p + 1];
+  for (std::size_t n = 0; n < num_nodes; ++n) child_begin[n + 1] += child_begin[n];
+  std::vector<NodeId> child_items(parent_items.size());
+  {
+    std::vector<Index> fill(child_begin.begin(), child_begin.end() - 1);
+    for (NodeId n = 1; n < num_nodes; ++n)
+      for (Index k = parent_begin[n]; k < parent_begin[n + 1]; ++k) child_items[fill[parent_items[k]]++] = n;
   }
   std::vector<Index> missing(num_nodes);
-  for (NodeId n = 0; n < num_nodes; ++n) missing[n] = static_cast<Index>(parents[n].size());
+  for (NodeId n = 0; n < num_nodes; ++n) missing[n] = parent_begin[n + 1] - parent_begin[n];
   std::vector<NodeId> order;
   order.reserve(num_nodes);
   for (NodeId n = 0; n < num_nodes; ++n)
@@ -258,8 +315,8 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
     fail("has no parent but is not the source", bad);
   }
   for (std::size_t i = 0; i < order.size(); ++i)
-    for (NodeId c : children[order[i]])
-      if (--missing[c] == 0) order.push_back(c);
+    for (Index k = child_begin[order[i]]; k < child_begin[order[i] + 1]; ++k)
+      if (--missing[child_items[k]] == 0) order.push_back(child_items[k]);
   if (order.size() != num_nodes) {
     for (NodeId n = 0; n < num_nodes; ++n)
       if (missing[n] != 0) fail("lies on a cycle of the dependency graph", n);

@@ -17,6 +17,8 @@ constexpr std::uint32_t kVersion = 1;
 
 std::string encode_mt(const Mt& mt) {
   detail::Writer w;
+  w.reserve(sizeof kMagic + 24 + 12 * mt.num_vertices() + 12 * mt.num_faces() + 13 * mt.num_nodes() +
+            4 * mt.num_faces() + 8);
   w.bytes(kMagic, sizeof kMagic);
   w.le<std::uint32_t>(kVersion);
   w.le(static_cast<std::uint32_t>(mt.num_vertices()));

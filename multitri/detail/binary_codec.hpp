@@ -29,8 +29,12 @@ class Writer {
   void bytes(const void* p, std::size_t n) { buf_.append(static_cast<const char*>(p), n); }
   template <class T> void le(T v) {
     static_assert(std::is_integral_v<T>);
-    for (std::size_t i = 0; i < sizeof(T); ++i) buf_.push_back(static_cast<char>((static_cast<std::uint64_t>(v) >> (8 * i)) & 0xffu));
+    char b[sizeof(T)];
+    for (std::size_t i = 0; i < sizeof(T); ++i) b[i] = static_cast<char>((static_cast<std::uint64_t>(v) >> (8 * i)) & 0xffu);
+    buf_.append(b, sizeof(T));
   }
+  /// Room for `n` more bytes (saves the reallocations of a large file).
+  void reserve(std::size_t n) { buf_.reserve(buf_.size() + n); }
   void f32(float v) { le(std::bit_cast<std::uint32_t>(v)); }
   /// Appends the checksum of everything written so far.
   void finish_with_checksum() { le(fnv1a64(buf_.data(), buf_.size())); }
@@ -76,7 +80,12 @@ class Reader {
     return n;
   }
   /// Verifies the trailing FNV-1a 64 checksum over everything before it; call when positioned on it.
+  /// After check_checksum_up_front() succeeded, a parse that ends exactly on the checksum needs no second pass.
   void check_checksum() {
+    if (checked_up_front_ && pos_ + 8 == data_.size()) {
+      pos_ += 8;
+      return;
+    }
     const std::uint64_t expect = fnv1a64(data_.data(), pos_);
     const std::uint64_t got = le<std::uint64_t>("checksum");
     if (got != expect) {
@@ -87,18 +96,20 @@ class Reader {
   }
   /// Verifies the checksum stored in the last 8 bytes before parsing anything (so that corruption is
   /// reported as such, not as a confusing parse error).
-  void check_checksum_up_front() const {
+  void check_checksum_up_front() {
     if (data_.size() < 8) throw IoError(file_, "truncated: shorter than a checksum", IoError::kNoLine, data_.size());
     const std::size_t body = data_.size() - 8;
     std::uint64_t got = 0;
     for (std::size_t i = 0; i < 8; ++i) got |= static_cast<std::uint64_t>(static_cast<unsigned char>(data_[body + i])) << (8 * i);
     if (got != fnv1a64(data_.data(), body)) throw IoError(file_, "checksum mismatch (file corrupt or truncated)", IoError::kNoLine, body);
+    checked_up_front_ = true;
   }
 
  private:
   std::string_view data_;
   std::string file_;
   std::size_t pos_ = 0;
+  bool checked_up_front_ = false;
 };
 
 }  // namespace varmesh::detail

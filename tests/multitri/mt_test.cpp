@@ -186,8 +186,42 @@ TEST(Mt, RejectsRedundantFace) {
   const FaceId other = s.b.add_face(s.m, s.v1, s.v2);
   const FaceId r2[] = {s.c[0], s.c[1]}, c2[] = {dup, other};
   s.b.add_node(NodeKind::kSwap, r2, c2, 0.0f);
+  const FaceId first = s.c[0];
   const std::string msg = message_of(std::move(s.b));
   EXPECT_NE(msg.find("redundant"), std::string::npos) << msg;
+  // Both faces are named, the later one first.
+  EXPECT_NE(msg.find("creates face " + std::to_string(dup) + " with the same vertices as face " + std::to_string(first)),
+            std::string::npos)
+      << msg;
+}
+
+// The same check on a larger structure, the repeat in another winding and far from the first face: a fan of
+// splits around one vertex, then a node that re-creates an early face reversed.
+TEST(Mt, RejectsRedundantFaceInALargeStructure) {
+  MtBuilder b;
+  constexpr int kRim = 64;
+  const VertexId centre = b.add_vertex({0, 0, 0});
+  std::vector<VertexId> rim;
+  for (int i = 0; i < kRim; ++i) {
+    const float a = 6.2831853f * static_cast<float>(i) / kRim;
+    rim.push_back(b.add_vertex({std::cos(a), std::sin(a), 0.0f}));
+  }
+  std::vector<FaceId> base;
+  for (int i = 0; i < kRim; ++i) base.push_back(b.add_face(centre, rim[static_cast<std::size_t>(i)], rim[static_cast<std::size_t>((i + 1) % kRim)]));
+  b.set_base(base);
+  // Generic node: replace faces 0 and 1 (centre, r0, r1), (centre, r1, r2) by (r0, r1, r2), (centre, r0, r2)...
+  const FaceId g0 = b.add_face(rim[0], rim[1], rim[2]), g1 = b.add_face(centre, rim[0], rim[2]);
+  const FaceId rem[] = {base[0], base[1]}, cre[] = {g0, g1};
+  b.add_node(NodeKind::kGeneric, rem, cre, 0.0f);
+  // ...and a later node that brings back face 5's vertex triple in the other winding.
+  const FaceId again = b.add_face(rim[6], rim[5], centre), other = b.add_face(centre, rim[5], rim[7]);
+  const FaceId rem2[] = {base[5], base[6]}, cre2[] = {again, other};
+  b.add_node(NodeKind::kGeneric, rem2, cre2, 0.0f);
+  const FaceId first = base[5];
+  const std::string msg = message_of(std::move(b));
+  EXPECT_NE(msg.find("creates face " + std::to_string(again) + " with the same vertices as face " + std::to_string(first)),
+            std::string::npos)
+      << msg;
 }
 
 TEST(Mt, RejectsCycle) {
