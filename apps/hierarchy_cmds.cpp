@@ -33,7 +33,7 @@ namespace varmesh::app {
 void add_build_options(CLI::App& sub, BuildArgs& a) {
   sub.add_option("INPUT", a.input, "mesh (.obj/.off/.ply), height field (.pgm/.png/.raw), or torus | saddle | implicit-torus")->required();
   sub.add_option("-o,--output", a.output, "output hierarchy (.vrm)")->required();
-  sub.add_option("--method", a.method, "semiregular | adaptive | simplify4k");
+  sub.add_option("--method", a.method, "semiregular (default) | adaptive | simplify4k");
   sub.add_option("--levels", a.levels, "semiregular: binary refinement levels (default 4); simplify4k: most levels (0: all)")->check(CLI::Range(-1, 64));
   sub.add_option("--tolerance", a.tolerance, "adaptive: geometric tolerance (default 1% of the bounding-box diagonal)");
   sub.add_option("--raw-size", a.raw_size, "W,H of a .raw float32 height field");
