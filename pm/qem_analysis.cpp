@@ -20,6 +20,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <span>
 #include <string>
 
 #include <glm/common.hpp>
@@ -183,12 +184,6 @@ class Analysis {
     }
     return glm::cross(c[1] - c[0], c[2] - c[0]);
   }
-  // Unit normal from the current corners, or 0 for a degenerate face.
-  void update_normal(Index f) {
-    const glm::dvec3 n = face_normal(f, kInvalid, glm::dvec3(0.0));
-    const double len = glm::length(n);
-    fnormal_[f] = len > 0.0 ? n / len : glm::dvec3(0.0);
-  }
   // fplane_[f] from the current corners and their (unnormalised) normal n.
   void set_plane(Index f, const glm::dvec3& n) { fplane_[f] = glm::dvec4(n, glm::dot(n, geo_[cur_[3 * f]].p)); }
   const Index* faces_begin(Index v) const { return fpool_.data() + fadj_[v].off; }
@@ -245,7 +240,9 @@ class Analysis {
   Verdict check(Index a, Index b, const glm::dvec3& p, Step& st);
   void collapse(Index a, Index b, const Placement& pl, const Step& st);
   void init_faces();
+  void init_quadrics();
   void init_edges();
+  void init_leaf_bounds();  // after init_edges(): reads the edge runs
 
   ManifoldInput in_;
   QemOptions opt_;
@@ -595,7 +592,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
         for (int k = 0; k < 3; ++k)
           if (cur_[3 * f + k] == b) cur_[3 * f + k] = vs;
       fpool_.push_back(f);
-      const double len = glm::length(*n1);  // as update_normal() on the relabelled face
+      const double len = glm::length(*n1);  // as init_faces() on the relabelled face
       fnormal_[f] = len > 0.0 ? *n1 / len : glm::dvec3(0.0);
       if (lt_) set_plane(f, *n1);
       ++n1;
@@ -724,37 +721,27 @@ void Analysis::init_faces() {
       Run& r = fadj_[cur_[3 * f + k]];
       fpool_[r.off + r.cnt++] = static_cast<Index>(f);
     }
+  // Unit normals from the corners (0 for a degenerate face), and Lindstrom-Turk's planes from the same
+  // unnormalised normal.
   fnormal_.resize(nf_);
-  for (std::size_t f = 0; f < nf_; ++f) update_normal(static_cast<Index>(f));
-  if (lt_) {
-    fplane_.resize(nf_);
-    for (Index f = 0; f < nf_; ++f) set_plane(f, face_normal(f, kInvalid, glm::dvec3(0.0)));
+  if (lt_) fplane_.resize(nf_);
+  for (std::size_t f = 0; f < nf_; ++f) {
+    const glm::dvec3& p0 = geo_[cur_[3 * f]].p;
+    const glm::dvec3 n = glm::cross(geo_[cur_[3 * f + 1]].p - p0, geo_[cur_[3 * f + 2]].p - p0);
+    const double len = glm::length(n);
+    fnormal_[f] = len > 0.0 ? n / len : glm::dvec3(0.0);
+    if (lt_) set_plane(static_cast<Index>(f), n);
   }
 }
 
 void Analysis::init_edges() {
-  // Candidate edges: one per pair of neighbours, in each end's run.
+  // Candidate edges: one per pair of neighbours, numbered as one pass over the leaves meets them (each
+  // leaf's faces in its run, a neighbour above it at its first corner), and listed in each end's run in
+  // that order: a counting sort by end of the edges, whose counts the same pass collects. 2 E = 3 F + B on
+  // a manifold, and B is the number of border vertices when each is one fan: exact on clean input, and
+  // push_back copes with the rest.
   eadj_.assign(nl_, Run{});
-  for (std::size_t v = 0; v < nl_; ++v) {
-    ++stamp_;
-    for (const Index* it = faces_begin(static_cast<Index>(v)); it != faces_end(static_cast<Index>(v)); ++it)
-      for (int k = 0; k < 3; ++k) {
-        const Index w = cur_[3 * *it + k];
-        if (w != v && mark_[w] != stamp_) {
-          mark_[w] = stamp_;
-          ++eadj_[v].off;  // degree, for now
-        }
-      }
-  }
-  Index off = 0;
-  for (Run& r : eadj_) {
-    const Index deg = r.off;
-    r.off = off;
-    off += deg;
-  }
-  epool_.reserve(2 * static_cast<std::size_t>(off));
-  epool_.resize(off);
-  edges_.reserve(off / 2);
+  edges_.reserve((3 * nf_ + static_cast<std::size_t>(std::count(border_.begin(), border_.end(), 1))) / 2);
   for (std::size_t v = 0; v < nl_; ++v) {
     ++stamp_;
     for (const Index* it = faces_begin(static_cast<Index>(v)); it != faces_end(static_cast<Index>(v)); ++it)
@@ -762,17 +749,168 @@ void Analysis::init_edges() {
         const Index w = cur_[3 * *it + k];
         if (w > v && mark_[w] != stamp_) {
           mark_[w] = stamp_;
-          const Index id = static_cast<Index>(edges_.size());
-          const Placement pl = place(static_cast<Index>(v), w);
-          edges_.push_back({static_cast<Index>(v), w, pl.cost, kept(pl)});
-          epool_[eadj_[v].off + eadj_[v].cnt++] = {id, w};
-          epool_[eadj_[w].off + eadj_[w].cnt++] = {id, static_cast<Index>(v)};
+          edges_.push_back({static_cast<Index>(v), w, 0.0, glm::dvec3(0.0)});
+          ++eadj_[v].cnt;
+          ++eadj_[w].cnt;
         }
       }
   }
-  heap_.grow_ids(edges_.capacity());
+  Index off = 0;
+  for (Run& r : eadj_) {
+    r.off = off;
+    off += r.cnt;
+    r.cnt = 0;
+  }
+  epool_.reserve(2 * static_cast<std::size_t>(off));
+  epool_.resize(off);
+  // Each edge is costed just before it joins its ends' runs: a Lindstrom-Turk cost reads the runs of both
+  // ends (the neighbours of the shape term), and sees the edges numbered before it only.
+  for (Index id = 0; id < edges_.size(); ++id) {
+    Edge& e = edges_[id];
+    const Placement pl = place(e.a, e.b);
+    e.cost = pl.cost;
+    e.p = kept(pl);
+    epool_[eadj_[e.a].off + eadj_[e.a].cnt++] = {id, e.b};
+    epool_[eadj_[e.b].off + eadj_[e.b].cnt++] = {id, e.a};
+  }
+  heap_.grow_ids(edges_.size());
   for (Index id = 0; id < edges_.size(); ++id) heap_.push_unordered(id, edges_[id].cost, tie_key(edges_[id]));
   heap_.heapify();
+}
+
+void Analysis::init_quadrics() {
+  // Quadrics: area-weighted face planes plus border constraints (GH97). The sums are those of one loop over
+  // the faces adding each face's plane and then its border edges' planes (in corner order) to their
+  // corners, to the bit: the planes go to the corners in face order first, and a border vertex then sums its
+  // own again, in that loop's order, with its border planes. The edge v -> next of a face of v is a border
+  // edge when no face of v holds next -> v (next before v); prev -> v when none holds v -> prev. v's faces
+  // answer both, so the test reads v's run only.
+  for (std::size_t f = 0; f < nf_; ++f) {
+    const Index c0 = cur_[3 * f], c1 = cur_[3 * f + 1], c2 = cur_[3 * f + 2];
+    if (colors_) {
+      const AttributeQuadric q = AttributeQuadric::from_triangle({geo_[c0].p, ucol_[c0]}, {geo_[c1].p, ucol_[c1]}, {geo_[c2].p, ucol_[c2]});
+      aq_[c0] += q;
+      aq_[c1] += q;
+      aq_[c2] += q;
+    } else {
+      const Quadric q = Quadric::from_triangle(geo_[c0].p, geo_[c1].p, geo_[c2].p);
+      geo_[c0].q += q;
+      geo_[c1].q += q;
+      geo_[c2].q += q;
+    }
+  }
+  auto border_quadric = [&](Index x, Index y, Index z) {
+    return Quadric::from_border_edge(geo_[x].p, geo_[y].p, geo_[z].p, opt_.border_penalty);
+  };
+  // Per face of v: the corners after and before v, in buffers as long as the longest run.
+  Index most = 0;
+  for (const Run& r : fadj_) most = std::max(most, r.cnt);
+  std::vector<Index> after_buf(most), before_buf(most);
+  for (Index v = 0; v < nl_; ++v) {
+    const std::span<Index> after(after_buf.data(), fadj_[v].cnt), before(before_buf.data(), fadj_[v].cnt);
+    for (Index i = 0; i < fadj_[v].cnt; ++i) {
+      const Index* c = &cur_[3 * faces_begin(v)[i]];
+      const int j = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+      after[i] = c[(j + 1) % 3];
+      before[i] = c[(j + 2) % 3];
+    }
+    // An open fan has an edge leaving v with no twin: a corner after v that is before v in no face.
+    ++stamp_;
+    for (const Index w : before) mark_[w] = stamp_;
+    bool border = false;
+    for (const Index w : after) border |= mark_[w] != stamp_;
+    if (!border) continue;
+    border_[v] = 1;
+    Quadric q;
+    AttributeQuadric aq;
+    for (std::size_t i = 0; i < after.size(); ++i) {
+      const Index* c = &cur_[3 * faces_begin(v)[i]];
+      if (colors_) {
+        aq += AttributeQuadric::from_triangle({geo_[c[0]].p, ucol_[c[0]]}, {geo_[c[1]].p, ucol_[c[1]]},
+                                              {geo_[c[2]].p, ucol_[c[2]]});
+      } else {
+        q += Quadric::from_triangle(geo_[c[0]].p, geo_[c[1]].p, geo_[c[2]].p);
+      }
+      const Index next = after[i], prev = before[i];
+      const bool out = std::find(before.begin(), before.end(), next) == before.end();  // v -> next
+      const bool in = std::find(after.begin(), after.end(), prev) == after.end();     // prev -> v
+      // Corner order: v -> next is edge j of the face, prev -> v edge j + 2 (mod 3), so v -> next comes
+      // first only when v is corner 0.
+      const bool out_first = c[0] == v;
+      for (int pass = 0; pass < 2; ++pass) {
+        const bool is_out = (pass == 0) == out_first;
+        if (is_out ? !out : !in) continue;
+        const Quadric bq = is_out ? border_quadric(v, next, prev) : border_quadric(prev, v, next);
+        if (colors_) {
+          // Border planes constrain position only: embed the 3x3 part in the 6x6 quadric.
+          AttributeQuadric e;
+          const double m[3][3] = {{bq.a00, bq.a01, bq.a02}, {bq.a01, bq.a11, bq.a12}, {bq.a02, bq.a12, bq.a22}};
+          std::size_t idx = 0;
+          for (int r = 0; r < 6; ++r)
+            for (int k = r; k < 6; ++k, ++idx) e.a[idx] = (r < 3 && k < 3) ? m[r][k] : 0.0;
+          e.b = {bq.b0, bq.b1, bq.b2, 0, 0, 0};
+          e.c = bq.c;
+          aq += e;
+        } else {
+          q += bq;
+        }
+      }
+    }
+    if (colors_) aq_[v] = aq; else geo_[v].q = q;
+  }
+}
+
+void Analysis::init_leaf_bounds() {
+  // Leaf bounds: the sphere around the vertex through its faces' corners (the largest squared distance,
+  // one root) and the cone of its faces' unit normals.
+  std::vector<glm::vec4> unit(nf_);  // per face: unit normal, w = 1 for a face of nonzero area
+  for (std::size_t f = 0; f < nf_; ++f) {
+    const glm::vec3 p0 = in_.positions[cur_[3 * f]], p1 = in_.positions[cur_[3 * f + 1]], p2 = in_.positions[cur_[3 * f + 2]];
+    const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
+    const float len = glm::length(n);
+    unit[f] = len > 0.0f ? glm::vec4(n / len, 1.0f) : glm::vec4(0.0f);
+  }
+  for (Index v = 0; v < nl_; ++v) {
+    const glm::vec3 pv = in_.positions[v];
+    double r2 = 0.0;  // in double: |d|^2 overflows float for edges past ~1.8e19
+    glm::vec3 sum(0.0f);
+    float count = 0.0f;
+    // The corners of v's faces other than v are its neighbours, each met once here.
+    for (const EdgeRef* e = edges_begin(v); e != edges_end(v); ++e) {
+      const glm::dvec3 d = glm::dvec3(in_.positions[e->to]) - glm::dvec3(pv);
+      r2 = std::max(r2, glm::dot(d, d));
+    }
+    for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+      sum += glm::vec3(unit[*it]);
+      count += unit[*it].w;
+    }
+    // The normal cone without trigonometry: the normals are points of the unit sphere, and a ball that
+    // holds them cuts off a cap that holds them. A ball grown from their centroid one normal at a time
+    // (Ritter) gives the axis; the farthest normal from the axis gives the exact half-angle. Full when
+    // that normal is 90 degrees or more away, or when there is no normal at all.
+    NormalCone cone;
+    if (count > 0.0f) {
+      glm::vec3 c = sum / count;
+      float r = 0.0f;
+      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+        if (unit[*it].w == 0.0f) continue;
+        const glm::vec3 d = glm::vec3(unit[*it]) - c;
+        const float dd = glm::dot(d, d);
+        if (dd <= r * r) continue;
+        const float dl = std::sqrt(dd), grown = 0.5f * (r + dl);
+        c += d * ((grown - r) / dl);
+        r = grown;
+      }
+      if (const float cl = glm::length(c); cl > 0.0f) {
+        const glm::vec3 axis = c / cl;
+        float lo = 1.0f;
+        for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
+          if (unit[*it].w != 0.0f) lo = std::min(lo, glm::dot(axis, glm::vec3(unit[*it])));
+        if (lo > 2e-6f) cone = {axis, lo - 1e-6f};
+      }
+    }
+    raw_.bounds[v] = ElementBound{pv, static_cast<float>(std::sqrt(r2)), 0.0f, cone};
+  }
 }
 
 VertexHierarchy Analysis::run(QemStats& stats) {
@@ -818,81 +956,8 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     for (const glm::vec3& c : in_.colors) color_lo_ = glm::min(color_lo_, c), color_hi_ = glm::max(color_hi_, c);
   }
   init_faces();
-  // Quadrics: area-weighted face planes plus border constraints (GH97). The sums are those of one loop over
-  // the faces adding each face's plane and then its border edges' planes (in corner order) to their
-  // corners, to the bit: the planes go to the corners in face order first, and a border vertex then sums its
-  // own again, in that loop's order, with its border planes. The edge v -> next of a face of v is a border
-  // edge when no face of v holds next -> v (next before v); prev -> v when none holds v -> prev. v's faces
-  // answer both, so the test reads v's run only.
-  for (std::size_t f = 0; f < nf_; ++f) {
-    const Index c0 = cur_[3 * f], c1 = cur_[3 * f + 1], c2 = cur_[3 * f + 2];
-    if (colors_) {
-      const AttributeQuadric q = AttributeQuadric::from_triangle({geo_[c0].p, ucol_[c0]}, {geo_[c1].p, ucol_[c1]}, {geo_[c2].p, ucol_[c2]});
-      aq_[c0] += q;
-      aq_[c1] += q;
-      aq_[c2] += q;
-    } else {
-      const Quadric q = Quadric::from_triangle(geo_[c0].p, geo_[c1].p, geo_[c2].p);
-      geo_[c0].q += q;
-      geo_[c1].q += q;
-      geo_[c2].q += q;
-    }
-  }
-  auto border_quadric = [&](Index x, Index y, Index z) {
-    return Quadric::from_border_edge(geo_[x].p, geo_[y].p, geo_[z].p, opt_.border_penalty);
-  };
-  std::vector<Index> after, before;  // per face of v: the corners after and before v
-  for (Index v = 0; v < nl_; ++v) {
-    after.clear();
-    before.clear();
-    for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-      const Index* c = &cur_[3 * *it];
-      const int j = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
-      after.push_back(c[(j + 1) % 3]);
-      before.push_back(c[(j + 2) % 3]);
-    }
-    bool border = false;
-    for (std::size_t i = 0; i < after.size() && !border; ++i)
-      border = std::find(before.begin(), before.end(), after[i]) == before.end();
-    if (!border) continue;  // an open fan has an edge leaving v with no twin
-    border_[v] = 1;
-    Quadric q;
-    AttributeQuadric aq;
-    for (std::size_t i = 0; i < after.size(); ++i) {
-      const Index* c = &cur_[3 * faces_begin(v)[i]];
-      if (colors_) {
-        aq += AttributeQuadric::from_triangle({geo_[c[0]].p, ucol_[c[0]]}, {geo_[c[1]].p, ucol_[c[1]]},
-                                              {geo_[c[2]].p, ucol_[c[2]]});
-      } else {
-        q += Quadric::from_triangle(geo_[c[0]].p, geo_[c[1]].p, geo_[c[2]].p);
-      }
-      const Index next = after[i], prev = before[i];
-      const bool out = std::find(before.begin(), before.end(), next) == before.end();  // v -> next
-      const bool in = std::find(after.begin(), after.end(), prev) == after.end();     // prev -> v
-      // Corner order: v -> next is edge j of the face, prev -> v edge j + 2 (mod 3), so v -> next comes
-      // first only when v is corner 0.
-      const bool out_first = c[0] == v;
-      for (int pass = 0; pass < 2; ++pass) {
-        const bool is_out = (pass == 0) == out_first;
-        if (is_out ? !out : !in) continue;
-        const Quadric bq = is_out ? border_quadric(v, next, prev) : border_quadric(prev, v, next);
-        if (colors_) {
-          // Border planes constrain position only: embed the 3x3 part in the 6x6 quadric.
-          AttributeQuadric e;
-          const double m[3][3] = {{bq.a00, bq.a01, bq.a02}, {bq.a01, bq.a11, bq.a12}, {bq.a02, bq.a12, bq.a22}};
-          std::size_t idx = 0;
-          for (int r = 0; r < 6; ++r)
-            for (int k = r; k < 6; ++k, ++idx) e.a[idx] = (r < 3 && k < 3) ? m[r][k] : 0.0;
-          e.b = {bq.b0, bq.b1, bq.b2, 0, 0, 0};
-          e.c = bq.c;
-          aq += e;
-        } else {
-          q += bq;
-        }
-      }
-    }
-    if (colors_) aq_[v] = aq; else geo_[v].q = q;
-  }
+  init_quadrics();
+  init_edges();
 
   // Raw hierarchy: leaves first.
   raw_.num_leaves = nl_;
@@ -907,59 +972,8 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   raw_.records.reserve(nl_);
   raw_.ring_offsets.reserve(nl_ + 1);
   raw_.ring_items.reserve(8 * nl_);
-  {
-    // Leaf bounds: the sphere around the vertex through its faces' corners (the largest squared distance,
-    // one root) and the cone of its faces' unit normals.
-    std::vector<glm::vec4> unit(nf_);  // per face: unit normal, w = 1 for a face of nonzero area
-    for (std::size_t f = 0; f < nf_; ++f) {
-      const glm::vec3 p0 = in_.positions[cur_[3 * f]], p1 = in_.positions[cur_[3 * f + 1]], p2 = in_.positions[cur_[3 * f + 2]];
-      const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
-      const float len = glm::length(n);
-      unit[f] = len > 0.0f ? glm::vec4(n / len, 1.0f) : glm::vec4(0.0f);
-    }
-    for (Index v = 0; v < nl_; ++v) {
-      const glm::vec3 pv = in_.positions[v];
-      double r2 = 0.0;  // in double: |d|^2 overflows float for edges past ~1.8e19
-      glm::vec3 sum(0.0f);
-      float count = 0.0f;
-      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-        for (int k = 0; k < 3; ++k) {
-          const glm::dvec3 d = glm::dvec3(in_.positions[cur_[3 * *it + k]]) - glm::dvec3(pv);
-          r2 = std::max(r2, glm::dot(d, d));
-        }
-        sum += glm::vec3(unit[*it]);
-        count += unit[*it].w;
-      }
-      // The normal cone without trigonometry: the normals are points of the unit sphere, and a ball that
-      // holds them cuts off a cap that holds them. A ball grown from their centroid one normal at a time
-      // (Ritter) gives the axis; the farthest normal from the axis gives the exact half-angle. Full when
-      // that normal is 90 degrees or more away, or when there is no normal at all.
-      NormalCone cone;
-      if (count > 0.0f) {
-        glm::vec3 c = sum / count;
-        float r = 0.0f;
-        for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-          if (unit[*it].w == 0.0f) continue;
-          const glm::vec3 d = glm::vec3(unit[*it]) - c;
-          const float dd = glm::dot(d, d);
-          if (dd <= r * r) continue;
-          const float dl = std::sqrt(dd), grown = 0.5f * (r + dl);
-          c += d * ((grown - r) / dl);
-          r = grown;
-        }
-        if (const float cl = glm::length(c); cl > 0.0f) {
-          const glm::vec3 axis = c / cl;
-          float lo = 1.0f;
-          for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
-            if (unit[*it].w != 0.0f) lo = std::min(lo, glm::dot(axis, glm::vec3(unit[*it])));
-          if (lo > 2e-6f) cone = {axis, lo - 1e-6f};
-        }
-      }
-      raw_.bounds[v] = ElementBound{pv, static_cast<float>(std::sqrt(r2)), 0.0f, cone};
-    }
-  }
+  init_leaf_bounds();
 
-  init_edges();
   stale_.assign(lt_ ? edges_.size() : 0, 0);
   const std::size_t target_v = opt_.target_vertices;
   const std::size_t target_f = opt_.target_faces;
@@ -1064,7 +1078,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
 
 // make_manifold_input() of an input that needs no repair, in O(n) instead of its sorts: the same leaves
 // (numbered by first use), faces and report, or false when any repair step would apply (or a vertex is
-// too busy for the quadratic fan walk), leaving the caller to the general path. Clean means: no degenerate
+// too busy: more than 64 faces), leaving the caller to the general path. Clean means: no degenerate
 // face; every directed edge used once; no two faces on the same three corners; the faces around each
 // vertex form one fan (successive faces share an edge used in both directions).
 bool clean_manifold_input(const TriMesh& mesh, ManifoldInput& out) {
@@ -1087,46 +1101,55 @@ bool clean_manifold_input(const TriMesh& mesh, ManifoldInput& out) {
     }
   }
   const std::size_t nl = leaf_to_input.size();
-  // Faces around each leaf as (next, prev) corner pairs: face f at v holds v -> next and prev -> v.
-  std::vector<Index> off(nl + 1, 0);
-  for (Index c : corners) ++off[c + 1];
-  for (std::size_t v = 0; v < nl; ++v) off[v + 1] += off[v];
+  // Faces around each leaf as (next, prev) corner pairs: face f at v holds v -> next and prev -> v. A
+  // counting sort: off[v + 1] counts from the start of v's run to its end as the pairs are placed, so that
+  // v's run is off[v] .. off[v + 1] afterwards.
+  std::vector<Index> off(nl + 2, 0);
+  for (Index c : corners) ++off[c + 2];
+  for (std::size_t v = 1; v < nl; ++v) off[v + 1] += off[v];
   std::vector<std::array<Index, 2>> np(corners.size());
-  {
-    std::vector<Index> fill(off.begin(), off.end() - 1);
-    for (std::size_t i = 0; i < corners.size(); i += 3)
-      for (std::size_t k = 0; k < 3; ++k)
-        np[fill[corners[i + k]]++] = {corners[i + (k + 1) % 3], corners[i + (k + 2) % 3]};
+  for (std::size_t i = 0; i < corners.size(); i += 3) {
+    const Index c0 = corners[i], c1 = corners[i + 1], c2 = corners[i + 2];
+    np[off[c0 + 1]++] = {c1, c2};
+    np[off[c1 + 1]++] = {c2, c0};
+    np[off[c2 + 1]++] = {c0, c1};
   }
+  // The fan test in O(degree) per leaf, through at[w] = (v, i) while v is tested: w is the next corner of
+  // v's i-th face. Face j comes before face i when next_j = prev_i (they share the edge v - prev_i). A
+  // directed edge used twice repeats a next at its first end and a prev at its second; the test of the
+  // first end fails in any case, so a leaf whose prevs repeat may fail at once. With nexts and prevs
+  // distinct, a face has at most one predecessor and one successor: the faces form paths and cycles, and
+  // one fan is a single path (from the only face without a predecessor) or a single cycle.
   constexpr Index kMaxWalk = 64;
+  std::vector<std::array<Index, 2>> at(nl, {kInvalid, 0});
+  std::array<Index, kMaxWalk> succ;
   for (std::size_t v = 0; v < nl; ++v) {
     const std::array<Index, 2>* r = np.data() + off[v];
     const Index d = off[v + 1] - off[v];
     if (d > kMaxWalk) return false;
+    const Index self = static_cast<Index>(v);
+    for (Index i = 0; i < d; ++i) {
+      std::array<Index, 2>& a = at[r[i][0]];
+      if (a[0] == self) return false;  // directed edge v -> next used twice
+      a = {self, i};
+      succ[i] = kInvalid;
+    }
     Index start = 0, starts = 0;
     for (Index i = 0; i < d; ++i) {
-      bool has_pred = false;
-      for (Index j = 0; j < d; ++j) {
-        if (j == i) continue;
-        if (r[j][0] == r[i][0]) return false;  // directed edge v -> next used twice
-        if (r[j][0] == r[i][1]) {
-          if (r[j][1] == r[i][0]) return false;  // the same corners in the other orientation
-          has_pred = true;
-        }
+      const std::array<Index, 2>& a = at[r[i][1]];
+      if (a[0] != self) {  // no predecessor
+        if (starts++ == 0) start = i;
+        continue;
       }
-      if (!has_pred && starts++ == 0) start = i;
+      const Index j = a[1];
+      if (r[j][1] == r[i][0]) return false;  // the same corners in the other orientation
+      if (succ[j] != kInvalid) return false;  // prev -> v used twice
+      succ[j] = i;
     }
     if (starts > 1) return false;
-    // Walk the successors (the face holding next -> v) from the start: one fan covers all d faces.
+    // Walk the successors from the start: one fan covers all d faces.
     Index seen = 1;
-    for (Index i = start;;) {
-      Index succ = kInvalid;
-      for (Index j = 0; j < d && succ == kInvalid; ++j)
-        if (r[j][1] == r[i][0]) succ = j;
-      if (succ == kInvalid || succ == start) break;
-      ++seen;
-      i = succ;
-    }
+    for (Index i = succ[start]; i != kInvalid && i != start && seen <= d; i = succ[i]) ++seen;
     if (seen != d) return false;
   }
   InputRepairReport& rep = out.report;
