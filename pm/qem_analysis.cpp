@@ -763,15 +763,18 @@ void Analysis::init_edges() {
   }
   epool_.reserve(2 * static_cast<std::size_t>(off));
   epool_.resize(off);
-  // Each edge is costed just before it joins its ends' runs: a Lindstrom-Turk cost reads the runs of both
-  // ends (the neighbours of the shape term), and sees the edges numbered before it only.
   for (Index id = 0; id < edges_.size(); ++id) {
-    Edge& e = edges_[id];
+    const Edge& e = edges_[id];
+    epool_[eadj_[e.a].off + eadj_[e.a].cnt++] = {id, e.b};
+    epool_[eadj_[e.b].off + eadj_[e.b].cnt++] = {id, e.a};
+  }
+  // Costs once every run is complete: a Lindstrom-Turk cost reads the runs of both ends (the neighbours of
+  // its shape term). (Until 2026-11-24 each edge was costed as it joined the runs, so its first cost saw
+  // only the edges numbered before it.)
+  for (Edge& e : edges_) {
     const Placement pl = place(e.a, e.b);
     e.cost = pl.cost;
     e.p = kept(pl);
-    epool_[eadj_[e.a].off + eadj_[e.a].cnt++] = {id, e.b};
-    epool_[eadj_[e.b].off + eadj_[e.b].cnt++] = {id, e.a};
   }
   heap_.grow_ids(edges_.size());
   for (Index id = 0; id < edges_.size(); ++id) heap_.push_unordered(id, edges_[id].cost, tie_key(edges_[id]));
