@@ -3,8 +3,10 @@
 ///
 /// The file holds only the arrays the analysis produced; the loader hands them to
 /// VertexHierarchyBuilder::finish, which recomputes the derived arrays (parents, face creators, roots, base
-/// faces, node keys) and re-validates the whole hierarchy, so a loaded hierarchy is as trustworthy as a
-/// freshly built one. Re-encoding a loaded hierarchy gives the same bytes.
+/// faces, node keys) and re-validates the whole hierarchy, the replay of every collapse on the original
+/// faces included (VertexHierarchy::validate), so a loaded hierarchy is as trustworthy as a freshly built
+/// one even when the file was edited and re-sealed. That replay is most of the load time (the 437k-vertex
+/// dragon's 89 MB file: 0.85 s, 0.37 s without it). Re-encoding a loaded hierarchy gives the same bytes.
 ///
 /// Layout, format version 1. Every field is little-endian whatever the host; f32 is IEEE-754 binary32, u32
 /// and u64 are unsigned. N = L + C nodes; an array is present only where its condition says so.

@@ -274,6 +274,210 @@ void VertexHierarchy::validate() const {
     check_face(r.fl_hat, r.vl_hat, r.vt, r.vu);
     check_face(r.fr_hat, r.vr_hat, r.vu, r.vt);
   }
+  check_collapses();
+}
+
+void VertexHierarchy::check_collapses() const {
+  auto fail = [](const std::string& what) { throw std::logic_error("VertexHierarchy::validate: " + what); };
+  const std::size_t nl = num_leaves_, nn = num_nodes(), nf = faces_.size() / 3;
+  // The current mesh: corners as node ids, and per node a run of its live faces in one pool (a collapse
+  // appends the new node's run; the children's runs are dropped).
+  // `cnt` entries from `off`; `live` of them are faces still alive (an apex's run keeps the faces a
+  // collapse removed from it: they are skipped when the run is read, which is cheaper than compacting it).
+  struct Run {
+    std::size_t off = 0;
+    Index cnt = 0, live = 0;
+  };
+  std::vector<Index> cur(faces_);
+  std::vector<std::uint8_t> alive(nf, 1);
+  std::vector<Run> run(nn);
+  std::vector<Index> pool(cur.size());
+  {
+    for (Index c : cur) ++run[c].cnt;
+    std::size_t off = 0;
+    for (std::size_t v = 0; v < nl; ++v) {
+      run[v].off = off;
+      off += run[v].cnt;
+      run[v].live = run[v].cnt;
+      run[v].cnt = 0;
+    }
+    for (std::size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        Run& r = run[cur[3 * f + k]];
+        pool[r.off + r.cnt++] = static_cast<Index>(f);
+      }
+  }
+  auto faces_of = [&](Index v) { return std::span<const Index>(pool.data() + run[v].off, run[v].cnt); };
+  // Stamped scratch marks, one array per purpose.
+  std::vector<std::uint32_t> mark(nn, 0), seen(nn, 0);
+  std::uint32_t stamp = 0;
+
+  // 1. The original mesh: an oriented 2-manifold with border. Per leaf, its faces' (next, prev) corners by a
+  // counting sort in one pass over the faces (the leaf runs above give the places).
+  for (std::size_t f = 0; f < nf; ++f)
+    if (cur[3 * f] == cur[3 * f + 1] || cur[3 * f + 1] == cur[3 * f + 2] || cur[3 * f] == cur[3 * f + 2])
+      fail("original face " + std::to_string(f) + " repeats a corner");
+  std::vector<std::array<Index, 2>> np(cur.size());
+  {
+    std::vector<Index> fill(nl, 0);
+    for (std::size_t f = 0; f < nf; ++f) {
+      const Index c0 = cur[3 * f], c1 = cur[3 * f + 1], c2 = cur[3 * f + 2];
+      np[run[c0].off + fill[c0]++] = {c1, c2};
+      np[run[c1].off + fill[c1]++] = {c2, c0};
+      np[run[c2].off + fill[c2]++] = {c0, c1};
+    }
+  }
+  std::vector<Index> pos_of(nl, 0), succ;
+  for (Index v = 0; v < nl; ++v) {
+    const std::span<const std::array<Index, 2>> fs(np.data() + run[v].off, run[v].cnt);
+    const auto name = [&] { return "original vertex " + std::to_string(v); };
+    // Directed edges v -> next: each once. pos_of[next] = the face's place in the run while v is tested.
+    ++stamp;
+    for (Index i = 0; i < fs.size(); ++i) {
+      const Index w = fs[i][0];
+      if (mark[w] == stamp) fail(name() + ": the directed edge to " + std::to_string(w) + " is in two faces");
+      mark[w] = stamp;
+      pos_of[w] = i;
+    }
+    // Face j precedes face i around v when next_j == prev_i. Each face has at most one successor; one fan
+    // is one path (from the only face without a predecessor) or one cycle through all the faces.
+    succ.assign(fs.size(), kInvalid);
+    Index start = 0, starts = 0;
+    for (Index i = 0; i < fs.size(); ++i) {
+      const auto [next_i, prev_i] = fs[i];
+      if (mark[prev_i] != stamp) {
+        if (starts++ == 0) start = i;
+        continue;
+      }
+      const Index j = pos_of[prev_i];
+      if (fs[j][1] == next_i) fail(name() + ": two faces on the same corners");
+      if (succ[j] != kInvalid) fail(name() + ": the directed edge from " + std::to_string(prev_i) + " is in two faces");
+      succ[j] = i;
+    }
+    Index count = fs.empty() ? 0 : 1;
+    if (starts <= 1)
+      for (Index i = fs.empty() ? kInvalid : succ[start]; i != kInvalid && i != start && count <= fs.size(); i = succ[i])
+        ++count;
+    if (starts > 1 || count != fs.size()) fail(name() + ": its faces form more than one fan");
+  }
+  std::vector<std::array<Index, 2>>().swap(np);
+
+  // 2. The collapses, in node order. One pass per child reads its faces' corners into `ring_of` (per face:
+  // the face, v's corner index, the corners after and before v); every test then runs on those arrays.
+  struct Around {
+    Index face, next, prev;
+    int k;
+  };
+  std::vector<Around> around_a, around_b;
+  auto read_around = [&](Index v, std::vector<Around>& out) {
+    out.clear();
+    for (Index f : faces_of(v)) {
+      if (!alive[f]) continue;
+      const Index* c = &cur[3 * f];
+      const int k = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+      out.push_back({f, c[(k + 1) % 3], c[(k + 2) % 3], k});
+    }
+  };
+  // An open fan has a corner after v that is before v in no face.
+  auto is_border = [&](const std::vector<Around>& ar) {
+    ++stamp;
+    for (const Around& x : ar) seen[x.prev] = stamp;
+    for (const Around& x : ar)
+      if (seen[x.next] != stamp) return true;
+    return false;
+  };
+  pool.reserve(3 * pool.size());
+  for (std::size_t v = nl; v < nn; ++v) {
+    const CollapseRecord& r = records_[v - nl];
+    const auto name = [&] { return "node " + std::to_string(v) + " (replaying the collapses)"; };
+    const Index a = r.vt, b = r.vu;
+    if (a >= v || b >= v || a == b) fail(name() + ": its children are not earlier nodes");
+    if (run[a].live == 0 || run[b].live == 0) fail(name() + ": a child has no face left");
+    read_around(a, around_a);
+    read_around(b, around_b);
+    // The faces on the edge: fl holds a -> b, fr holds b -> a.
+    Index fl = kInvalid, fr = kInvalid, vl = kInvalid, vr = kInvalid;
+    int shared = 0;
+    for (const Around& x : around_a) {
+      if (x.next == b) fl = x.face, vl = x.prev, ++shared;
+      if (x.prev == b) fr = x.face, vr = x.next, ++shared;
+    }
+    if (shared == 0) fail(name() + ": its children are not joined by an edge");
+    if (fl != r.fl_hat || fr != r.fr_hat)
+      fail(name() + ": fl^/fr^ are not the faces on the edge of its children (faces " +
+           std::to_string(fl == kInvalid ? -1L : static_cast<long>(fl)) + ", " +
+           std::to_string(fr == kInvalid ? -1L : static_cast<long>(fr)) + ")");
+    if ((vl == kInvalid) != (r.vl_hat == kInvalid) || (vr == kInvalid) != (r.vr_hat == kInvalid) ||
+        (vl != kInvalid && !is_ancestor_or_self(vl, r.vl_hat)) || (vr != kInvalid && !is_ancestor_or_self(vr, r.vr_hat)))
+      fail(name() + ": vl^/vr^ are not under the third corners of fl^/fr^");
+    // Link condition: the common neighbours of a and b are the apexes; an interior edge does not join two
+    // border vertices; an apex keeps a face; no face of a and one of b both hold vl and vr (a tetrahedron).
+    if (shared == 2 && is_border(around_a) && is_border(around_b))
+      fail(name() + ": an interior edge between two border vertices");
+    ++stamp;
+    for (const Around& x : around_a) mark[x.next] = mark[x.prev] = stamp;
+    for (const Around& x : around_b)
+      for (Index w : {x.next, x.prev}) {
+        if (w == a || w == vl || w == vr) continue;
+        if (mark[w] == stamp) fail(name() + ": its children share the neighbour " + std::to_string(w) + " (link condition)");
+      }
+    for (Index x : {vl, vr})
+      if (x != kInvalid && run[x].live <= 1) fail(name() + ": the collapse leaves vertex " + std::to_string(x) + " no face");
+    // Hoppe's fn0..fn3: the faces across (b, vl), (vl, a), (a, vr), (vr, b), i.e. holding vl -> b, a -> vl,
+    // vr -> a, b -> vr.
+    std::array<Index, 4> fn{kInvalid, kInvalid, kInvalid, kInvalid};
+    bool apexes[2] = {false, false};
+    for (const Around& x : around_a) {
+      if (x.next == vl && vl != kInvalid) fn[1] = x.face;
+      if (x.prev == vr && vr != kInvalid) fn[2] = x.face;
+      if (vl != kInvalid && vr != kInvalid && ((x.next == vl && x.prev == vr) || (x.next == vr && x.prev == vl)))
+        apexes[0] = true;
+    }
+    for (const Around& x : around_b) {
+      if (x.prev == vl && vl != kInvalid) fn[0] = x.face;
+      if (x.next == vr && vr != kInvalid) fn[3] = x.face;
+      if (vl != kInvalid && vr != kInvalid && ((x.next == vl && x.prev == vr) || (x.next == vr && x.prev == vl)))
+        apexes[1] = true;
+    }
+    if (apexes[0] && apexes[1]) fail(name() + ": the collapse would make two faces on the same corners");
+    if (fn != r.fn) fail(name() + ": fn0..fn3 are not the faces around fl^ and fr^");
+    // The stored ring (Xia-Varshney): the neighbours of the new node (the corners of the faces it keeps), each
+    // once.
+    ++stamp;
+    std::size_t neighbours = 0;
+    for (const std::vector<Around>* ar : {&around_a, &around_b})
+      for (const Around& x : *ar) {
+        if (x.face == fl || x.face == fr) continue;
+        for (Index w : {x.next, x.prev})
+          if (w != a && w != b && seen[w] != stamp) seen[w] = stamp, ++neighbours;
+      }
+    const std::span<const Index> ring = stored_ring(static_cast<Index>(v));
+    if (ring.size() != neighbours) fail(name() + ": the stored ring is not the set of its neighbours");
+    for (Index w : ring) {
+      if (w >= nn || seen[w] != stamp) fail(name() + ": the stored ring is not the set of its neighbours");
+      seen[w] = stamp - 1;  // each once
+    }
+    // The collapse: fl and fr die, the other faces of a and b move to v (a's then b's), the apexes lose them.
+    for (Index f : {fl, fr})
+      if (f != kInvalid) alive[f] = 0;
+    run[v].off = pool.size();
+    for (const std::vector<Around>* ar : {&around_a, &around_b})
+      for (const Around& x : *ar) {
+        if (x.face == fl || x.face == fr) continue;
+        cur[3 * x.face + static_cast<std::size_t>(x.k)] = static_cast<Index>(v);
+        pool.push_back(x.face);
+      }
+    run[v].cnt = run[v].live = static_cast<Index>(pool.size() - run[v].off);
+    run[a].cnt = run[b].cnt = run[a].live = run[b].live = 0;
+    for (Index x : {vl, vr})
+      if (x != kInvalid) --run[x].live;  // fl holds vl once, fr holds vr once
+  }
+  // 3. What is left is the base mesh.
+  std::size_t left = 0;
+  for (std::size_t f = 0; f < nf; ++f) left += alive[f];
+  if (left != base_faces_.size()) fail("the collapses leave " + std::to_string(left) + " faces, the base mesh has " + std::to_string(base_faces_.size()));
+  for (Index f : base_faces_)
+    if (!alive[f]) fail("base face " + std::to_string(f) + " was removed by a collapse");
 }
 
 }  // namespace varmesh

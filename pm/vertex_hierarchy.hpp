@@ -19,7 +19,16 @@
 /// Invariants (validate()): parent/children consistent, children created before parents, keys consistent
 /// with the tree shape, bounds nested (child sphere inside parent sphere up to rounding, child error <=
 /// parent error, child cone inside parent cone up to 2e-3 radians), faces' corners are leaves, fl^/fr^
-/// contain vl^/vr^ and one descendant of each child.
+/// contain vl^/vr^ and one descendant of each child; and the topology, by replaying the collapses on the
+/// original faces (check_collapses()): the original mesh is an oriented 2-manifold with border (no repeated
+/// corner, each directed edge once, each vertex one fan, no two faces on the same corners), and each record,
+/// in node order, is a legal full-edge collapse of its current mesh as the analysis makes them: vt and vu
+/// share exactly the faces fl^ (holding vt -> vu) and fr^ (vu -> vt), whose third corners are
+/// the ancestors of vl^ and vr^; the link condition holds (their only common neighbours are those corners,
+/// an interior edge does not join two border vertices, an apex keeps a face, no tetrahedron); fn0..fn3 are
+/// the faces across (vu, vl), (vl, vt), (vt, vr), (vr, vu); the stored ring is the set of vs's neighbours
+/// afterwards; and the faces left at the end are the base mesh. Up to geometry, a hierarchy that passes is
+/// one the analysis could have built, which is what SrMesh's three schemes rely on.
 #include <array>
 #include <bit>
 #include <cstddef>
@@ -133,7 +142,8 @@ class VertexHierarchy {
   bool is_locked(Index leaf) const noexcept { return !locked_.empty() && locked_[leaf] != 0; }
   const InputRepairReport& repair_report() const noexcept { return repair_; }
 
-  /// Throws std::logic_error naming the first broken invariant (see the header comment). O(nodes + faces).
+  /// Throws std::logic_error naming the first broken invariant (see the header comment). O(nodes + faces)
+  /// for the records, plus the replay of the collapses: O(sum over collapses of the faces around both ends).
   void validate() const;
   /// Bytes held by the arrays the synthesis phase reads.
   std::size_t memory_bytes() const noexcept;
@@ -141,6 +151,9 @@ class VertexHierarchy {
  private:
   friend class VertexHierarchyBuilder;
   friend struct HierarchyFileAccess;
+
+  // The topological part of validate() (see the header comment).
+  void check_collapses() const;
 
   std::size_t num_leaves_ = 0;
   std::vector<glm::vec3> positions_;
