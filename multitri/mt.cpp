@@ -44,8 +44,11 @@ void boundary_and_interior(const std::vector<Index>& corners, std::span<const Fa
   interior.clear();
   for (std::uint64_t e : directed) {
     const auto a = static_cast<VertexId>(e >> 32), b = static_cast<VertexId>(e & 0xffffffffu);
-    // A node's faces are few: a linear scan beats a binary search here.
-    if (std::find(directed.begin(), directed.end(), edge_key(b, a)) != directed.end()) {
+    // A node's faces are usually few: then a linear scan beats a binary search.
+    const std::uint64_t rev = edge_key(b, a);
+    const bool has_reverse = directed.size() <= 32 ? std::find(directed.begin(), directed.end(), rev) != directed.end()
+                                                   : std::binary_search(directed.begin(), directed.end(), rev);
+    if (has_reverse) {
       if (a < b) interior.push_back(e);
     } else {
       boundary.push_back(e);
@@ -235,9 +238,26 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
       return std::find(first, last, a) == last;
     };
     std::vector<std::uint64_t> b0, i0, b1, i1, diff, scratch;
+    // A face set that uses a directed edge twice is no oriented surface patch (after the call, `scratch`
+    // holds its directed edges sorted).
+    auto no_repeated_edge = [&](NodeId n, const char* which) {
+      const auto it = std::adjacent_find(scratch.begin(), scratch.end());
+      if (it != scratch.end())
+        fail(std::string(which) + " uses the directed edge " + std::to_string(*it >> 32) + "-" +
+                 std::to_string(*it & 0xFFFFFFFFu) + " twice",
+             n);
+    };
+    scratch.clear();
+    for (FaceId f : created(0))
+      for (int k = 0; k < 3; ++k) scratch.push_back(edge_key(corners_[3 * f + k], corners_[3 * f + (k + 1) % 3]));
+    std::sort(scratch.begin(), scratch.end());
+    no_repeated_edge(0, "the base mesh");
+    std::vector<Index> pre_corners;
     for (NodeId n = 1; n < num_nodes; ++n) {
       boundary_and_interior(corners_, removed(n), b0, i0, scratch);
+      no_repeated_edge(n, "its pre-image");
       boundary_and_interior(corners_, created(n), b1, i1, scratch);
+      no_repeated_edge(n, "its image");
       diff.clear();
       std::set_symmetric_difference(b0.begin(), b0.end(), b1.begin(), b1.end(), std::back_inserter(diff));
       for (std::uint64_t e : diff)
@@ -257,12 +277,18 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
             if (!used[static_cast<std::size_t>(it - added.begin())]) found = static_cast<std::size_t>(it - added.begin()), ++count;
           return count == 1 ? found : added.size();
         };
+        // The path's inner vertices are new: none is a corner of the pre-image (a path through one would
+        // fold the border onto the patch).
+        pre_corners.clear();
+        for (FaceId f : removed(n)) pre_corners.insert(pre_corners.end(), &corners_[3 * f], &corners_[3 * f] + 3);
+        std::sort(pre_corners.begin(), pre_corners.end());
         for (std::uint64_t e : gone) {
           const Index u = static_cast<Index>(e >> 32), v = static_cast<Index>(e & 0xFFFFFFFFu);
           Index at = u;
           for (std::size_t steps = 0; at != v; ++steps) {
             const std::size_t k = next_from(at);
-            if (k == added.size() || steps > added.size())
+            if (k == added.size() || steps > added.size() ||
+                (at != u && std::binary_search(pre_corners.begin(), pre_corners.end(), at)))
               fail("changes the structure's border other than by subdividing edge " + std::to_string(u) + "-" +
                        std::to_string(v),
                    n);

@@ -224,6 +224,34 @@ TEST(Mt, RejectsRedundantFaceInALargeStructure) {
       << msg;
 }
 
+// An oriented surface uses each directed edge once. The base mesh and every image are checked for it: a
+// node whose image held a directed edge twice kept the same oriented boundary, so it passed, and its front
+// was no conforming mesh.
+TEST(Mt, RejectsARepeatedDirectedEdge) {
+  {
+    MtBuilder b;
+    const VertexId v0 = b.add_vertex({0, 0, 0}), v1 = b.add_vertex({1, 0, 0}), v2 = b.add_vertex({0, 1, 0}),
+                   v3 = b.add_vertex({0, -1, 0});
+    const FaceId base[] = {b.add_face(v0, v1, v2), b.add_face(v0, v1, v3)};  // v0 -> v1 twice
+    b.set_base(base);
+    const std::string msg = message_of(std::move(b));
+    EXPECT_NE(msg.find("the base mesh uses the directed edge"), std::string::npos) << msg;
+  }
+  {
+    // The four-face split of the square plus a closed tetrahedron on (m, v1, w, z): the tetrahedron's
+    // edges pair among themselves, so the boundary is still the square's, but m -> v1 is used twice.
+    Square s;
+    const VertexId w = s.b.add_vertex({1, 0, 1}), z = s.b.add_vertex({0.5f, 0.5f, 1});
+    std::vector<FaceId> created(s.c, s.c + 4);
+    for (const auto& t : std::vector<std::array<VertexId, 3>>{{s.m, s.v1, w}, {s.m, w, z}, {s.m, z, s.v1}, {s.v1, z, w}})
+      created.push_back(s.b.add_face(t[0], t[1], t[2]));
+    const FaceId removed[] = {s.t0, s.t1};
+    s.b.add_node(NodeKind::kGeneric, removed, created, 0.0f);
+    const std::string msg = message_of(std::move(s.b));
+    EXPECT_NE(msg.find("its image uses the directed edge"), std::string::npos) << msg;
+  }
+}
+
 TEST(Mt, RejectsCycle) {
   // Two generic nodes that each remove a face the other creates.
   MtBuilder b;
