@@ -387,7 +387,25 @@ void VertexHierarchy::check_collapses() const {
     return false;
   };
   pool.reserve(3 * pool.size());
+  // The faces around successive collapses are scattered: read the children's runs two steps ahead and their
+  // faces' corners one step ahead so that the misses overlap (a run not created yet has no entries).
+  constexpr std::size_t kAhead = 8;
+  using detail::touch;
+  auto touch_runs = [&](std::size_t i) {
+    const CollapseRecord& q = records_[i];
+    for (Index c : {q.vt, q.vu})
+      if (c < nn) touch(run[c].cnt);
+  };
+  auto touch_corners = [&](std::size_t i) {
+    const CollapseRecord& q = records_[i];
+    for (Index c : {q.vt, q.vu})
+      if (c < nn)
+        for (Index k = 0; k < run[c].cnt; ++k) touch(cur[3 * std::size_t{pool[run[c].off + k]}]);
+  };
   for (std::size_t v = nl; v < nn; ++v) {
+    const std::size_t i = v - nl;
+    if (i + 2 * kAhead < records_.size()) touch_runs(i + 2 * kAhead);
+    if (i + kAhead < records_.size()) touch_corners(i + kAhead);
     const CollapseRecord& r = records_[v - nl];
     const auto name = [&] { return "node " + std::to_string(v) + " (replaying the collapses)"; };
     const Index a = r.vt, b = r.vu;
