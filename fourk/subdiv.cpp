@@ -17,6 +17,7 @@
 #include <limits>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include <unistd.h>
 
@@ -793,10 +794,34 @@ Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, Su
   };
   std::unordered_map<std::array<Index, 3>, Index, TriangleHash> fan_owner;  // sorted corners -> face
   fan_owner.reserve(t.face_verts.size());
+  // A fan's diagonals must be new edges: a diagonal that is already an edge of the mesh (or of another
+  // face's fan) would be used twice in one direction, and no front would be a conforming mesh. The fan
+  // starts at corner 0 unless one of its diagonals is taken; then at the first corner whose diagonals are
+  // all free.
+  auto edge_key = [](Index x, Index y) { return x < y ? (std::uint64_t{x} << 32 | y) : (std::uint64_t{y} << 32 | x); };
+  std::unordered_set<std::uint64_t> taken;  // undirected edges of the mesh and of the fans so far
+  for (std::size_t e = 0; e < t.num_edges(); ++e) taken.insert(edge_key(t.edge_verts[2 * e], t.edge_verts[2 * e + 1]));
   for (Index f = 0; f < t.num_faces; ++f) {
     const Index off = t.offset(f), k = t.face_size(f);
+    Index apex = 0;
+    if (k > 3) {
+      auto free_from = [&](Index r) {
+        for (Index i = 2; i + 1 < k; ++i)
+          if (taken.count(edge_key(t.face_verts[off + r], t.face_verts[off + (r + i) % k]))) return false;
+        return true;
+      };
+      while (apex < k && !free_from(apex)) ++apex;
+      if (apex == k)
+        throw InvalidInput("build_subdivision_mt: face " + std::to_string(f) +
+                               ": every fan of it has a diagonal that is already an edge of the mesh (or of another "
+                               "face's fan), so its triangles could not form a conforming mesh",
+                           f);
+      for (Index i = 2; i + 1 < k; ++i)
+        taken.insert(edge_key(t.face_verts[off + apex], t.face_verts[off + (apex + i) % k]));
+    }
     for (Index i = 1; i + 1 < k; ++i) {
-      const std::array<Index, 3> c{t.face_verts[off], t.face_verts[off + i], t.face_verts[off + i + 1]};
+      const std::array<Index, 3> c{t.face_verts[off + apex], t.face_verts[off + (apex + i) % k],
+                                   t.face_verts[off + (apex + i + 1) % k]};
       std::array<Index, 3> sorted = c;
       std::sort(sorted.begin(), sorted.end());
       if (const auto [it, inserted] = fan_owner.emplace(sorted, f); !inserted)

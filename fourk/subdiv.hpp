@@ -181,7 +181,10 @@ std::vector<glm::dvec3> catmull_clark_limit_positions(const SubdivMesh& mesh);
 /// its position after all `steps` steps, so the fully refined front is the uniform result (to_tri_mesh)
 /// and every front is a conforming mesh through points of it. Node error: the largest distance, over the
 /// node and its descendants, between a new vertex and the midpoint of the edge it splits (saturated by
-/// MtBuilder). Throws as subdivide.
+/// MtBuilder). The base polygons are fanned from their first corner, or from the first corner whose
+/// diagonals are not edges already (a diagonal used twice would leave no front conforming). Throws as
+/// subdivide, and InvalidInput naming a face whose every fan has such a diagonal, or two faces whose fans
+/// share a triangle.
 struct SubdivMtInfo {
   std::vector<std::uint16_t> node_step;  ///< per Mt node: its binary step (1-based; 0 for the source)
   std::size_t uniform_faces = 0;         ///< triangles of the fully refined front

@@ -340,6 +340,29 @@ TEST(Subdiv, AdaptiveMtFullyRefinedIsUniformAndFrontsConform) {
     }
 }
 
+// A quad whose fan diagonal (corner 0 to corner 2) is already an edge of the mesh behind it: the Mt's
+// base triangles then used that directed edge twice, so no front was a conforming mesh (and since
+// MtBuilder checks for it, the build was refused). The fan now starts at a corner whose diagonals are new.
+TEST(Subdiv, FanDiagonalsAreNewEdges) {
+  PolyMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.7, 0.3, -1}, {0.3, 0.7, -1}};
+  for (const std::vector<Index>& face : std::vector<std::vector<Index>>{
+           {0, 1, 2, 3}, {1, 0, 4}, {2, 1, 4}, {0, 2, 4}, {0, 3, 5}, {3, 2, 5}, {2, 0, 5}})
+    m.add_face(face);
+  ASSERT_NO_THROW(m.validate());
+  for (SubdivScheme scheme : {SubdivScheme::kLinear, SubdivScheme::kCatmullClark, SubdivScheme::kFourEight}) {
+    Mt mt;
+    ASSERT_NO_THROW(mt = build_subdivision_mt(m, scheme, 2)) << to_string(scheme);
+    MtFront front(mt);
+    ASSERT_NO_THROW(front.validate()) << to_string(scheme) << " base";
+    for (NodeId n = 1; n < mt.num_nodes(); ++n) {
+      front.refine(n);
+      ASSERT_NO_THROW(front.validate()) << to_string(scheme) << " after node " << n;
+    }
+    EXPECT_EQ(front.num_faces(), subdivide(m, scheme, 2).to_tri_mesh().num_faces()) << to_string(scheme);
+  }
+}
+
 TEST(Subdiv, UnreferencedVerticesStayWhereTheyAre) {
   PolyMesh cube = make_quad_cube();
   cube.positions.emplace_back(5.0, 6.0, 7.0);  // no face uses it
