@@ -524,6 +524,14 @@ TEST(HierarchyIo, SemanticErrorsBehindAValidChecksum) {
   }
 }
 
+// An edited file, re-sealed, must be refused as an invalid hierarchy for `reason`.
+void rejected(Bytes b, const std::string& reason) {
+  reseal(b);
+  const IoError e = decode_error(b, nullptr, "edit.vmh");
+  EXPECT_TRUE(contains(e.reason(), "not a valid vertex hierarchy")) << e.what();
+  EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
+}
+
 // Records that are each well-formed but do not fit the hierarchy they sit in: the schemes used to loop
 // forever (Hoppe's forced splits on a neighbour face created by the node itself, Xia-Varshney on a stored
 // ring naming a node that is not there), read out of bounds (two equal cut vertices) or build a wrong mesh
@@ -541,12 +549,6 @@ TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
     ++both;
   ASSERT_LT(both, nc);
   const CollapseRecord& r = h.record(static_cast<Index>(nl + both));
-  auto rejected = [&](Bytes b, const char* reason) {
-    reseal(b);
-    const IoError e = decode_error(b, nullptr, "edit.vmh");
-    EXPECT_TRUE(contains(e.reason(), "not a valid vertex hierarchy")) << e.what();
-    EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
-  };
   {
     Bytes b = good;  // fn[0] := the node's own fl^
     put_le(b, record_at(both) + 24, r.fl_hat, 4);
@@ -587,12 +589,6 @@ TEST(HierarchyIo, TopologyNoCollapseSequenceMakesIsRejected) {
   const Bytes good = encode_vertex_hierarchy(h);
   const Layout at = layout_of(h, good);
   const std::size_t nl = h.num_leaves(), nc = h.num_collapses();
-  auto rejected = [&](Bytes b, const std::string& reason) {
-    reseal(b);
-    const IoError e = decode_error(b, nullptr, "edit.vmh");
-    EXPECT_TRUE(contains(e.reason(), "not a valid vertex hierarchy")) << e.what();
-    EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
-  };
   {
     // A base face turned over: its edges now run the same way as its neighbours'.
     Bytes b = good;
