@@ -71,6 +71,9 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
   sub.add_option("--cost", a.cost,
                  "quadric (Garland-Heckbert order, volume-preserving placement; default), quadric-plain (vs at the "
                  "quadric's minimiser) or lindstrom-turk");
+  sub.add_option("--lt-finish", a.lt_finish,
+                 "quadric costs with --faces or --vertices: from this many times the target on, order and place the "
+                 "collapses by Lindstrom-Turk costs (default 4; 0: quadrics to the end)");
   sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(CLI::NonNegativeNumber);
   sub.add_option("--vertices", a.vertices, "stop at this many vertices")->check(CLI::NonNegativeNumber);
   sub.add_option("--max-error", a.max_error, "stop before a collapse whose error exceeds this (object units)")
@@ -326,6 +329,12 @@ int run_pm_build(const PmBuildArgs& a) {
   if (a.max_error >= 0.0f) o.max_error = a.max_error;
   o.target_faces = a.faces;
   o.target_vertices = a.vertices;
+  if (!(a.lt_finish == 0.0 || (a.lt_finish >= 1.0 && std::isfinite(a.lt_finish)))) {
+    char given[32];
+    std::snprintf(given, sizeof given, "%g", a.lt_finish);
+    throw InvalidInput(std::string("--lt-finish must be 0 or a number >= 1, not ") + given);
+  }
+  o.lt_finish = a.lt_finish;
   o.use_colors = a.colors;
   const TriMesh mesh = read_input_mesh(a.input);
   if (a.colors && !mesh.has_colors()) throw InvalidInput("pm build --colors: '" + a.input + "' has no vertex colours");

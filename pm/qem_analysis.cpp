@@ -197,6 +197,7 @@ class Analysis {
   glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const;
   void set_edge(Index e, Index a, Index b);
   void reinsert_edges_of(Index v);
+  void switch_to_lt();
   // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
   // rather than __builtin_prefetch. On the machine measured (a VM) the prefetches gained little; the same
   // reads as loads overlap.
@@ -443,6 +444,34 @@ void Analysis::set_edge(Index e, Index a, Index b) {
   const Placement pl = place(a, b);
   edges_[e] = node_of_[a] < node_of_[b] ? Edge{a, b, pl.cost, kept(pl)} : Edge{b, a, pl.cost, kept(pl)};
   heap_.update(e, edges_[e].cost, tie_key(edges_[e]));
+}
+
+// From here on the collapses are ordered and placed by Lindstrom-Turk's memoryless costs (QemOptions::lt_finish):
+// the planes of the live faces, and every live edge costed again (each once, from its lower slot).
+void Analysis::switch_to_lt() {
+  lt_ = true;
+  volume_ = false;
+  fplane_.resize(nf_);
+  for (std::size_t f = 0; f < nf_; ++f)
+    if (alive_[f]) {
+      const glm::dvec3& p0 = geo_[cur_[3 * f]].p;
+      set_plane(static_cast<Index>(f), glm::cross(geo_[cur_[3 * f + 1]].p - p0, geo_[cur_[3 * f + 2]].p - p0));
+    }
+  stale_.assign(edges_.size(), 0);
+  heap_.clear();
+  for (std::size_t v = 0; v < node_alive_.size(); ++v) {
+    if (!node_alive_[v]) continue;
+    rejected_[v] = 0;
+    for (const EdgeRef* r = edges_begin(static_cast<Index>(v)); r != edges_end(static_cast<Index>(v)); ++r) {
+      if (r->to < v) continue;
+      Edge& e = edges_[r->edge];
+      const Placement pl = place_lt(e.a, e.b);
+      e.cost = pl.cost;
+      e.p = kept(pl);
+      heap_.push_unordered(r->edge, e.cost, tie_key(e));
+    }
+  }
+  heap_.heapify();
 }
 
 void Analysis::reinsert_edges_of(Index v) {
@@ -985,7 +1014,19 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   };
   std::size_t since_rebuild = 0;
   Step step;
+  // The Lindstrom-Turk finish (QemOptions::lt_finish): the last stretch before a face or vertex target.
+  bool finish_pending = opt_.cost == CollapseCost::kQuadric && !colors_ && opt_.lt_finish > 0.0 && (target_v > 0 || target_f > 0);
+  auto finish_reached = [&] {
+    auto within = [&](std::size_t alive, std::size_t target) {
+      return target > 0 && static_cast<double>(alive) <= opt_.lt_finish * static_cast<double>(target);
+    };
+    return within(alive_vertices_, target_v) || within(alive_faces_, target_f);
+  };
   while (!done()) {
+    if (finish_pending && finish_reached()) {
+      finish_pending = false;
+      switch_to_lt();
+    }
     if (heap_.empty()) {
       if (since_rebuild == 0) break;
       since_rebuild = 0;
@@ -1183,6 +1224,8 @@ VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& op
   if (!(options.color_weight > 0.0) || !std::isfinite(options.color_weight))
     throw InvalidInput("QemOptions::color_weight must be finite and > 0");
   if (std::isnan(options.max_error) || options.max_error < 0.0) throw InvalidInput("QemOptions::max_error must be >= 0");
+  if (!(options.lt_finish == 0.0 || (options.lt_finish >= 1.0 && std::isfinite(options.lt_finish))))
+    throw InvalidInput("QemOptions::lt_finish must be 0 or a finite number >= 1");
   if (options.max_depth < 1 || options.max_depth > 62) throw InvalidInput("QemOptions::max_depth must be in [1, 62]");
   mesh.validate();
   ManifoldInput in;

@@ -70,6 +70,15 @@ struct QemOptions {
   /// and then the minimiser itself are tried. false: vs at the quadric's minimiser (GH97). Collapses whose
   /// quadric has no well-conditioned minimiser keep the segment fallback either way.
   bool preserve_volume = true;
+  /// With CollapseCost::kQuadric, no colours and a face or vertex target: once the mesh is down to
+  /// lt_finish times the target (faces or vertices, whichever comes first), the remaining collapses are
+  /// ordered and placed by Lindstrom-Turk's memoryless costs (see CollapseCost::kLindstromTurk). The
+  /// quadrics carry the mesh cheaply through the fine levels, where any reasonable order is nearly as good;
+  /// the last collapses, which decide the error at the target, are chosen on the current surface. At 1 % of
+  /// the faces this brings the error to Lindstrom-Turk's own (bunny RMS 17.2 -> 13.3e-4 of the diagonal,
+  /// BENCHMARKS.md) for about 2 % more time. 0 turns it off; without a face or vertex target (max_error
+  /// only, or the smallest base mesh) it does not apply. Must be 0 or >= 1.
+  double lt_finish = 4.0;
   bool use_colors = false;     ///< GH98 attribute quadrics when the input has colours
   double color_weight = 1.0;   ///< colour unit = color_weight * bounding-box diagonal
   NonManifoldPolicy non_manifold = NonManifoldPolicy::kSplit;

@@ -9,6 +9,7 @@
 
 #include "multitri/mesh_io.hpp"
 #include "pm/hierarchy_io.hpp"
+#include "pm/qem_analysis.hpp"
 #include "pm/pm_fixtures.hpp"
 #include "apps/cli_support.hpp"
 #include "test_support.hpp"
@@ -52,11 +53,24 @@ TEST(PmCli, BuildWritesTheHierarchyTheLibraryReads) {
     EXPECT_EQ(h.num_faces(), b.input.num_faces());
     EXPECT_GT(h.num_collapses(), b.input.num_vertices() / 2);
   }
-  // A face target stops the analysis there.
-  const Built b = build_torus("pm_cli_build_target", "--faces 100");
-  const VertexHierarchy h = read_vertex_hierarchy(b.vmh.string());
-  EXPECT_LE(h.base_faces().size(), 100u);
-  EXPECT_GT(h.base_faces().size(), 90u);
+  // A face target stops the analysis there, with or without the Lindstrom-Turk finish; --lt-finish 0 gives
+  // the library's quadrics-to-the-end hierarchy.
+  for (const std::string finish : {"", " --lt-finish 0", " --lt-finish 2.5"}) {
+    SCOPED_TRACE(finish);
+    const Built b = build_torus("pm_cli_build_target", "--faces 100" + finish);
+    const VertexHierarchy h = read_vertex_hierarchy(b.vmh.string());
+    EXPECT_LE(h.base_faces().size(), 100u);
+    EXPECT_GT(h.base_faces().size(), 90u);
+    QemOptions o;
+    o.target_faces = 100;
+    o.lt_finish = finish.empty() ? 4.0 : std::stod(finish.substr(finish.rfind(' ') + 1));
+    const VertexHierarchy lib = build_vertex_hierarchy(read_mesh(b.mesh.string()), o);
+    ASSERT_EQ(h.num_collapses(), lib.num_collapses());
+    for (Index v = static_cast<Index>(h.num_leaves()); v < h.num_nodes(); ++v) {
+      EXPECT_EQ(h.record(v).vt, lib.record(v).vt) << "node " << v;
+      EXPECT_EQ(h.record(v).vu, lib.record(v).vu) << "node " << v;
+    }
+  }
 }
 
 TEST(PmCli, QueryRefinesUnderEachScheme) {
@@ -105,6 +119,8 @@ TEST(PmCli, BadInputIsNamed) {
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --colors", "has no vertex colours"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error nan", "--max-error must be"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error -2", "--max-error: must be >= 0"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --faces 50 --lt-finish 0.5", "--lt-finish must be 0 or a number >= 1, not 0.5"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --lt-finish inf", "--lt-finish must be"},
       {"pm query " + b.vmh.string() + " -o " + out, "give --error E, --camera ... or --budget N"},
       {"pm query " + b.vmh.string() + " --error 1 --scheme fast -o " + out, "--scheme: unknown 'fast'"},
       {"pm query " + b.vmh.string() + " --error nan -o " + out, "--error must be"},

@@ -27,11 +27,13 @@
 #include "multitri/mesh_report.hpp"
 #include "multitri/mt_front.hpp"
 #include "multitri/query.hpp"
+#include "distance_oracle.hpp"
 #include "test_support.hpp"
 
 namespace varmesh {
 namespace {
 
+using testing::point_triangle;
 using Key = std::array<VertexId, 3>;
 
 std::uint64_t dkey(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
@@ -165,27 +167,6 @@ Topology topology(const TriMesh& m) {
   t.chi = r.euler_characteristic;
   t.closed = r.closed;
   return t;
-}
-
-double point_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
-  const glm::dvec3 ab = b - a;
-  const double l2 = glm::dot(ab, ab);
-  const double t = l2 > 0.0 ? std::clamp(glm::dot(p - a, ab) / l2, 0.0, 1.0) : 0.0;
-  return glm::length(p - (a + t * ab));
-}
-
-// Distance to a triangle by projection onto its plane (inside: plane distance) or else the nearest edge;
-// written independently of the library's (Ericson) version.
-double point_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-  const glm::dvec3 n = glm::cross(b - a, c - a);
-  const double nn = glm::dot(n, n);
-  if (nn > 0.0) {
-    const glm::dvec3 q = p - n * (glm::dot(p - a, n) / nn);
-    const double s0 = glm::dot(glm::cross(b - a, q - a), n), s1 = glm::dot(glm::cross(c - b, q - b), n),
-                 s2 = glm::dot(glm::cross(a - c, q - c), n);
-    if (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) return std::abs(glm::dot(p - a, n)) / std::sqrt(nn);
-  }
-  return std::min({point_segment(p, a, b), point_segment(p, b, c), point_segment(p, c, a)});
 }
 
 // Points of the input surface: every used vertex, every face centroid and `per_face` random points per face.
