@@ -4,7 +4,9 @@
 ///
 /// Each step collapses the cheapest legal edge (vt, vu) into a new vertex vs placed at the quadric's
 /// minimiser (Quadric::optimal_on_segment: the linear solve when well conditioned, else the best point of
-/// the edge), moved by default to the volume-preserving plane (QemOptions::preserve_volume).
+/// the edge), moved by default to the volume-preserving plane (QemOptions::preserve_volume). With a face or
+/// vertex target, the last stretch (from QemOptions::lt_finish times the target on) is ordered and placed
+/// by Lindstrom-Turk costs.
 /// QemOptions::cost = CollapseCost::kLindstromTurk orders and places the collapses by Lindstrom-Turk's
 /// memoryless costs instead (lower error, slower: see CollapseCost). Legal means:
 /// - link condition: the common neighbours of vt and vu are exactly the apexes of the edge's faces (two, or
@@ -35,8 +37,8 @@ namespace varmesh {
 /// How collapses are ordered and placed (QemOptions::cost).
 enum class CollapseCost {
   /// Garland-Heckbert 1997: accumulated area-weighted plane quadrics (plus border constraint planes) of each
-  /// vertex's region; vs at the quadric minimiser, moved to keep the volume (QemOptions::preserve_volume).
-  /// The product's method.
+  /// vertex's region; vs at the quadric minimiser, moved to keep the volume (QemOptions::preserve_volume);
+  /// Lindstrom-Turk costs for the last collapses before a target (QemOptions::lt_finish). The default.
   kQuadric,
   /// Lindstrom-Turk 1998/1999 memoryless simplification: cost and placement from the current mesh only (the
   /// faces around both ends): vs preserves the enclosed volume and the border's area vector, then minimises
