@@ -360,6 +360,9 @@ int run_pm_build(const PmBuildArgs& a) {
               "depth %d; %.1f bytes per original face; %.3f s -> %s\n",
               st.collapses, st.rejected_link, st.rejected_flip, st.base_vertices, st.base_faces, h.num_roots(),
               h.max_depth(), double(h.memory_bytes()) / double(h.num_faces()), st.seconds, a.output.c_str());
+  if (st.lt_finished)
+    std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,
+                st.collapses, a.lt_finish);
   return 0;
 }
 

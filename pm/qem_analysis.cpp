@@ -1025,6 +1025,8 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   while (!done()) {
     if (finish_pending && finish_reached()) {
       finish_pending = false;
+      stats.lt_finished = true;
+      stats.lt_finish_from = stats.collapses;
       switch_to_lt();
     }
     if (heap_.empty()) {

@@ -94,6 +94,8 @@ struct QemStats {
   std::size_t collapses = 0;
   std::size_t rejected_link = 0, rejected_flip = 0, rejected_depth = 0, rejected_locked = 0;
   std::size_t queue_rebuilds = 0;  ///< extra passes over all edges once the queue ran dry
+  bool lt_finished = false;        ///< the Lindstrom-Turk finish started (QemOptions::lt_finish)
+  std::size_t lt_finish_from = 0;  ///< collapses done when it started (valid when lt_finished)
   std::size_t base_vertices = 0, base_faces = 0;
   double seconds = 0.0;
 };

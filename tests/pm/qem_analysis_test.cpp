@@ -449,12 +449,16 @@ TEST(QemAnalysis, LindstromTurkFinishTakesOverAtItsThreshold) {
     quadric.lt_finish = 0.0;
     QemOptions finish = quadric;
     finish.lt_finish = 4.0;
-    const VertexHierarchy hq = build_vertex_hierarchy(m, quadric), hf = build_vertex_hierarchy(m, finish);
+    QemStats sq, sf;
+    const VertexHierarchy hq = build_vertex_hierarchy(m, quadric, &sq), hf = build_vertex_hierarchy(m, finish, &sf);
     hq.validate();
     hf.validate();
     // A closed mesh loses two faces and one vertex per collapse: the switch comes after k collapses, the
     // first k with faces (vertices) <= 4 x the target.
     const std::size_t k = by_faces ? (m.num_faces() - 4 * 60 + 1) / 2 : m.num_vertices() - 4 * 30;
+    EXPECT_FALSE(sq.lt_finished);
+    EXPECT_TRUE(sf.lt_finished);
+    EXPECT_EQ(sf.lt_finish_from, k);
     ASSERT_GE(hq.num_collapses(), k);
     ASSERT_GE(hf.num_collapses(), k);
     EXPECT_TRUE(same_records(hq, hf, k));
@@ -481,7 +485,9 @@ TEST(QemAnalysis, LindstromTurkFinishNeedsAFaceOrVertexTarget) {
   for (const QemOptions& base : {smallest, error_only, colours, lt}) {
     QemOptions off = base;
     off.lt_finish = 0.0;
-    const VertexHierarchy on = build_vertex_hierarchy(m, base), plain = build_vertex_hierarchy(m, off);
+    QemStats st;
+    const VertexHierarchy on = build_vertex_hierarchy(m, base, &st), plain = build_vertex_hierarchy(m, off);
+    EXPECT_FALSE(st.lt_finished);
     ASSERT_EQ(on.num_collapses(), plain.num_collapses());
     EXPECT_TRUE(same_records(on, plain, on.num_collapses()));
   }
