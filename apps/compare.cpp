@@ -729,7 +729,7 @@ CaseResult run_case(CaseInput in, const Options& o, bool& failed) {
     for (std::size_t l = 0; l < h.num_leaves(); ++l) pieces.positions.push_back(h.position(static_cast<Index>(l)));
     std::unordered_map<std::uint64_t, Index> mid;
     auto midpoint = [&](Index a, Index b) {
-      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+      const std::uint64_t key = undirected_edge_key(a, b);
       const auto it = mid.find(key);
       if (it != mid.end()) return it->second;
       pieces.positions.push_back(0.5f * (h.position(a) + h.position(b)));

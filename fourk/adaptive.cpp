@@ -46,8 +46,6 @@ std::string num(double x) {
 
 std::string point_text(const glm::dvec3& p) { return "(" + num(p.x) + ", " + num(p.y) + ", " + num(p.z) + ")"; }
 
-std::uint64_t directed_key(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
-std::uint64_t undirected_key(VertexId a, VertexId b) { return a < b ? directed_key(a, b) : directed_key(b, a); }
 
 bool finite(const glm::vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
@@ -523,7 +521,7 @@ class ImplicitRefiner final : public Refiner {
   }
 
  protected:
-  std::uint64_t edge_key(VertexId a, VertexId b) const override { return undirected_key(a, b); }
+  std::uint64_t edge_key(VertexId a, VertexId b) const override { return undirected_edge_key(a, b); }
 
   VertexId midpoint(VertexId e0, VertexId e1) override {
     const glm::dvec3 a(positions_[e0]), b(positions_[e1]);
@@ -562,7 +560,7 @@ std::vector<std::array<FaceId, 3>> face_neighbours(const TriMesh& mesh, const st
       throw InvalidInput(who + ": base face " + std::to_string(f) + " is degenerate (repeated corner)", f);
     for (int k = 0; k < 3; ++k) {
       const VertexId p = mesh.corner(f, k), q = mesh.corner(f, (k + 1) % 3);
-      const auto [it, inserted] = owner.try_emplace(directed_key(p, q), static_cast<FaceId>(f));
+      const auto [it, inserted] = owner.try_emplace(directed_edge_key(p, q), static_cast<FaceId>(f));
       if (!inserted)
         throw InvalidInput(who + ": base face " + std::to_string(f) + " uses edge (" + std::to_string(p) + ", " +
                                std::to_string(q) + ") in the same direction as face " + std::to_string(it->second) +
@@ -573,7 +571,7 @@ std::vector<std::array<FaceId, 3>> face_neighbours(const TriMesh& mesh, const st
   std::vector<std::array<FaceId, 3>> nbr(nf);
   for (std::size_t f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k) {
-      const auto it = owner.find(directed_key(mesh.corner(f, (k + 1) % 3), mesh.corner(f, k)));
+      const auto it = owner.find(directed_edge_key(mesh.corner(f, (k + 1) % 3), mesh.corner(f, k)));
       nbr[f][k] = it == owner.end() ? kInvalid : it->second;
     }
     // Two faces on one vertex triple (a closed "pillow") share all three edges: their first split would make
@@ -720,7 +718,7 @@ std::vector<std::uint8_t> pair_and_mark(const TriMesh& mesh, const std::vector<s
         if (!allowed(k)) continue;
         const VertexId a = mesh.corner(f, k), b = mesh.corner(f, (k + 1) % 3);
         const double len = edge_length2(mesh, a, b);
-        const std::uint64_t key = undirected_key(a, b);
+        const std::uint64_t key = undirected_edge_key(a, b);
         if (len > best_len || (len == best_len && key < best_key)) {
           best = k;
           best_len = len;
@@ -959,7 +957,7 @@ TriMesh polygonize_freudenthal(const ImplicitSurface& surface) {
   std::unordered_map<std::uint64_t, Index> vertex_of;  // grid edge (a < b), or (a, a) for a grid vertex with f == 0
   auto edge_vertex = [&](Index in, Index out) -> Index {
     const bool at_vertex = gv[out] == 0.0;
-    const std::uint64_t key = at_vertex ? directed_key(out, out) : undirected_key(in, out);
+    const std::uint64_t key = at_vertex ? directed_edge_key(out, out) : undirected_edge_key(in, out);
     const auto [it, inserted] = vertex_of.try_emplace(key, static_cast<Index>(mesh.positions.size()));
     if (!inserted) return it->second;
     glm::dvec3 p = gp[out];

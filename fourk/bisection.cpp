@@ -18,8 +18,6 @@ namespace varmesh {
 
 namespace {
 
-std::uint64_t directed_key(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
-std::uint64_t undirected_key(VertexId a, VertexId b) { return a < b ? directed_key(a, b) : directed_key(b, a); }
 
 std::string edge_name(VertexId a, VertexId b) { return "(" + std::to_string(a) + ", " + std::to_string(b) + ")"; }
 
@@ -54,7 +52,7 @@ void check_input(const TriMesh& base, std::span<const std::uint8_t> refinement_e
   for (std::size_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
       const VertexId a = base.corner(f, k), b = base.corner(f, (k + 1) % 3);
-      const auto [it, inserted] = owner.try_emplace(directed_key(a, b), static_cast<FaceId>(f));
+      const auto [it, inserted] = owner.try_emplace(directed_edge_key(a, b), static_cast<FaceId>(f));
       if (!inserted)
         throw InvalidInput("build_bisection_mt: face " + std::to_string(f) + " uses edge " + edge_name(a, b) +
                                " in the same direction as face " + std::to_string(it->second) +
@@ -64,7 +62,7 @@ void check_input(const TriMesh& base, std::span<const std::uint8_t> refinement_e
   for (std::size_t f = 0; f < nf; ++f) {
     const int k = refinement_edge[f];
     const VertexId a = base.corner(f, k), b = base.corner(f, (k + 1) % 3);
-    const auto twin = owner.find(directed_key(b, a));
+    const auto twin = owner.find(directed_edge_key(b, a));
     if (twin == owner.end()) continue;  // border edge: a 1 -> 2 split
     const FaceId g = twin->second;
     const int kg = refinement_edge[g];
@@ -104,7 +102,7 @@ Mt build_bisection_mt(const TriMesh& base, std::span<const std::uint8_t> refinem
   for (int level = 1; level <= levels; ++level) {
     by_edge.clear();
     by_edge.reserve(current.size());
-    for (std::size_t i = 0; i < current.size(); ++i) by_edge.emplace(directed_key(current[i].e0, current[i].e1), i);
+    for (std::size_t i = 0; i < current.size(); ++i) by_edge.emplace(directed_edge_key(current[i].e0, current[i].e1), i);
     done.assign(current.size(), 0);
     next.clear();
     next.reserve(2 * current.size());
@@ -113,7 +111,7 @@ Mt build_bisection_mt(const TriMesh& base, std::span<const std::uint8_t> refinem
       const LevelFace& t = current[i];
       // Compatibility is inherited from the base (see bisection.hpp), so the twin across the marked edge,
       // if any, marks it too.
-      const auto twin = by_edge.find(directed_key(t.e1, t.e0));
+      const auto twin = by_edge.find(directed_edge_key(t.e1, t.e0));
       const LevelFace* u = twin == by_edge.end() ? nullptr : &current[twin->second];
       done[i] = 1;
       if (u) done[twin->second] = 1;
@@ -176,7 +174,7 @@ std::vector<std::uint8_t> mark_longest_edges(const TriMesh& mesh) {
       if (b < a) std::swap(a, b);  // same arithmetic on both sides of a shared edge: ties agree
       const glm::dvec3 d = glm::dvec3(mesh.positions[b]) - glm::dvec3(mesh.positions[a]);
       const double len = d.x * d.x + d.y * d.y + d.z * d.z;
-      const std::uint64_t key = directed_key(a, b);
+      const std::uint64_t key = directed_edge_key(a, b);
       if (len > best_len || (len == best_len && key < best_key)) {
         best_len = len;
         best_key = key;
@@ -190,13 +188,13 @@ std::vector<std::uint8_t> mark_longest_edges(const TriMesh& mesh) {
 std::vector<std::uint8_t> mark_edges(const TriMesh& mesh, std::span<const std::array<VertexId, 2>> edges) {
   std::vector<std::uint64_t> keys;
   keys.reserve(edges.size());
-  for (const auto& e : edges) keys.push_back(undirected_key(e[0], e[1]));
+  for (const auto& e : edges) keys.push_back(undirected_edge_key(e[0], e[1]));
   std::sort(keys.begin(), keys.end());
   std::vector<std::uint8_t> mark(mesh.num_faces(), 0);
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
     int found = 0;
     for (int k = 0; k < 3; ++k)
-      if (std::binary_search(keys.begin(), keys.end(), undirected_key(mesh.corner(f, k), mesh.corner(f, (k + 1) % 3)))) {
+      if (std::binary_search(keys.begin(), keys.end(), undirected_edge_key(mesh.corner(f, k), mesh.corner(f, (k + 1) % 3)))) {
         mark[f] = static_cast<std::uint8_t>(k);
         ++found;
       }

@@ -19,7 +19,6 @@ namespace varmesh {
 
 namespace {
 
-std::uint64_t directed_key(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
 
 std::string he_name(HalfEdgeId h) {
   return "half-edge " + std::to_string(h) + " (face " + std::to_string(h / 3) + ", edge " + std::to_string(h % 3) + ")";
@@ -56,7 +55,7 @@ FourKMesh::FourKMesh(const TriMesh& base) {
   std::vector<std::pair<std::uint64_t, HalfEdgeId>> by_edge(3 * nf);
   for (HalfEdgeId h = 0; h < 3 * nf; ++h) {
     const VertexId a = point(h), b = target(h);
-    by_edge[h] = {a < b ? directed_key(a, b) : directed_key(b, a), h};
+    by_edge[h] = {undirected_edge_key(a, b), h};
   }
   std::sort(by_edge.begin(), by_edge.end());
   for (std::size_t i = 0; i < by_edge.size();) {
@@ -441,7 +440,7 @@ void FourKMesh::validate() const {
   keys.reserve(3 * num_current_);
   for (FaceId f = 0; f < nf; ++f)
     if (is_current(f))
-      for (int k = 0; k < 3; ++k) keys.push_back(directed_key(point_[3 * f + k], point_[3 * f + (k + 1) % 3]));
+      for (int k = 0; k < 3; ++k) keys.push_back(directed_edge_key(point_[3 * f + k], point_[3 * f + (k + 1) % 3]));
   std::sort(keys.begin(), keys.end());
   for (std::size_t i = 1; i < keys.size(); ++i)
     if (keys[i] == keys[i - 1])
@@ -453,7 +452,7 @@ void FourKMesh::validate() const {
     for (int k = 0; k < 3; ++k) {
       const HalfEdgeId h = 3 * f + static_cast<Index>(k), m = mate_[h];
       if (m == kInvalid) {
-        if (std::binary_search(keys.begin(), keys.end(), directed_key(target(h), point(h))))
+        if (std::binary_search(keys.begin(), keys.end(), directed_edge_key(target(h), point(h))))
           fail(he_name(h) + " has no mate but its reversed edge is in the current mesh", h);
         continue;
       }

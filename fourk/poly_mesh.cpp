@@ -14,7 +14,6 @@ namespace varmesh {
 
 namespace {
 
-std::uint64_t edge_key(Index a, Index b) noexcept { return (std::uint64_t{a} << 32) | b; }
 
 }  // namespace
 
@@ -68,7 +67,7 @@ void PolyMesh::validate() const {
     for (std::size_t i = 0; i < k; ++i) {
       const Index a = fc[i], b = fc[(i + 1) % k];
       ++corners_at[a];
-      if (!directed.emplace(edge_key(a, b), static_cast<Index>(face_offsets[f] + i)).second)
+      if (!directed.emplace(directed_edge_key(a, b), static_cast<Index>(face_offsets[f] + i)).second)
         throw InvalidInput("polygon mesh: edge " + std::to_string(a) + "-" + std::to_string(b) + " of face " +
                                std::to_string(f) +
                                " is used twice in the same direction (non-manifold edge or inconsistent orientation)",
@@ -98,7 +97,7 @@ void PolyMesh::validate() const {
     // Clockwise: the face across the outgoing edge v -> n holds the directed edge n -> v.
     for (Index s = s0;;) {
       const Index n = corners[next_slot(s)];
-      auto it = directed.find(edge_key(n, v));
+      auto it = directed.find(directed_edge_key(n, v));
       if (it == directed.end()) break;
       s = next_slot(it->second);  // corner of v in the neighbouring face
       if (s == s0) {
@@ -111,7 +110,7 @@ void PolyMesh::validate() const {
       // Counter-clockwise from s0: the face across the incoming edge p -> v holds v -> p.
       for (Index s = s0;;) {
         const Index p = corners[prev_slot(s)];
-        auto it = directed.find(edge_key(v, p));
+        auto it = directed.find(directed_edge_key(v, p));
         if (it == directed.end()) break;
         s = it->second;
         if (++count > corners_at[v]) break;
@@ -133,7 +132,7 @@ PolyEdgeCount count_edges(const PolyMesh& mesh) {
     for (std::size_t i = 0; i < fc.size(); ++i) {
       Index a = fc[i], b = fc[(i + 1) % fc.size()];
       if (a > b) std::swap(a, b);
-      ++seen[edge_key(a, b)];
+      ++seen[directed_edge_key(a, b)];
     }
   }
   c.edges = seen.size();

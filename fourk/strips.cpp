@@ -45,9 +45,6 @@ bool shared_edge(const Corners& a, const Corners& b, VertexId& u, VertexId& v) {
 
 bool faces_share_edge(const Mt& mt, FaceId f, FaceId g) { return common_count(mt.face(f), mt.face(g)) == 2; }
 
-std::uint64_t edge_key(VertexId a, VertexId b) {
-  return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
-}
 
 // Where the path enters and leaves a face (corners); kInvalid in both for the plain (unoriented) search.
 struct Orient {
@@ -154,7 +151,7 @@ class DualPaths {
     edges.reserve(3 * n_);
     for (std::size_t i = 0; i < n_; ++i)
       for (std::size_t k = 0; k < 3; ++k)
-        edges.emplace_back(edge_key(corners_[i][k], corners_[i][(k + 1) % 3]), static_cast<Index>(i));
+        edges.emplace_back(undirected_edge_key(corners_[i][k], corners_[i][(k + 1) % 3]), static_cast<Index>(i));
     std::sort(edges.begin(), edges.end());
     std::vector<std::pair<Index, Nbr>> pairs;
     for (std::size_t s = 0; s < edges.size();) {

@@ -798,16 +798,15 @@ Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, Su
   // face's fan) would be used twice in one direction, and no front would be a conforming mesh. The fan
   // starts at corner 0 unless one of its diagonals is taken; then at the first corner whose diagonals are
   // all free.
-  auto edge_key = [](Index x, Index y) { return x < y ? (std::uint64_t{x} << 32 | y) : (std::uint64_t{y} << 32 | x); };
   std::unordered_set<std::uint64_t> taken;  // undirected edges of the mesh and of the fans so far
-  for (std::size_t e = 0; e < t.num_edges(); ++e) taken.insert(edge_key(t.edge_verts[2 * e], t.edge_verts[2 * e + 1]));
+  for (std::size_t e = 0; e < t.num_edges(); ++e) taken.insert(undirected_edge_key(t.edge_verts[2 * e], t.edge_verts[2 * e + 1]));
   for (Index f = 0; f < t.num_faces; ++f) {
     const Index off = t.offset(f), k = t.face_size(f);
     Index apex = 0;
     if (k > 3) {
       auto free_from = [&](Index r) {
         for (Index i = 2; i + 1 < k; ++i)
-          if (taken.count(edge_key(t.face_verts[off + r], t.face_verts[off + (r + i) % k]))) return false;
+          if (taken.count(undirected_edge_key(t.face_verts[off + r], t.face_verts[off + (r + i) % k]))) return false;
         return true;
       };
       while (apex < k && !free_from(apex)) ++apex;
@@ -817,7 +816,7 @@ Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, Su
                                "face's fan), so its triangles could not form a conforming mesh",
                            f);
       for (Index i = 2; i + 1 < k; ++i)
-        taken.insert(edge_key(t.face_verts[off + apex], t.face_verts[off + (apex + i) % k]));
+        taken.insert(undirected_edge_key(t.face_verts[off + apex], t.face_verts[off + (apex + i) % k]));
     }
     for (Index i = 1; i + 1 < k; ++i) {
       const std::array<Index, 3> c{t.face_verts[off + apex], t.face_verts[off + (apex + i) % k],

@@ -27,7 +27,6 @@ namespace {
 
 using Edge = std::pair<VertexId, VertexId>;
 
-std::uint64_t edge_key(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
 
 // Oriented boundary of a face set: directed edges whose reverse is not in the set (counted with
 // multiplicity), plus the undirected interior edges. Both sorted.
@@ -38,14 +37,14 @@ void boundary_and_interior(const std::vector<Index>& corners, std::span<const Fa
   directed.clear();
   for (FaceId f : faces)
     for (int k = 0; k < 3; ++k)
-      directed.push_back(edge_key(corners[3 * f + k], corners[3 * f + (k + 1) % 3]));
+      directed.push_back(directed_edge_key(corners[3 * f + k], corners[3 * f + (k + 1) % 3]));
   std::sort(directed.begin(), directed.end());
   boundary.clear();
   interior.clear();
   for (std::uint64_t e : directed) {
     const auto a = static_cast<VertexId>(e >> 32), b = static_cast<VertexId>(e & 0xffffffffu);
     // A node's faces are usually few: then a linear scan beats a binary search.
-    const std::uint64_t rev = edge_key(b, a);
+    const std::uint64_t rev = directed_edge_key(b, a);
     const bool has_reverse = directed.size() <= 32 ? std::find(directed.begin(), directed.end(), rev) != directed.end()
                                                    : std::binary_search(directed.begin(), directed.end(), rev);
     if (has_reverse) {
@@ -249,7 +248,7 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
     };
     scratch.clear();
     for (FaceId f : created(0))
-      for (int k = 0; k < 3; ++k) scratch.push_back(edge_key(corners_[3 * f + k], corners_[3 * f + (k + 1) % 3]));
+      for (int k = 0; k < 3; ++k) scratch.push_back(directed_edge_key(corners_[3 * f + k], corners_[3 * f + (k + 1) % 3]));
     std::sort(scratch.begin(), scratch.end());
     no_repeated_edge(0, "the base mesh");
     std::vector<Index> pre_corners;

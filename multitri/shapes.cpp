@@ -23,7 +23,7 @@ TriMesh make_icosphere(int levels) {
   for (int l = 0; l < levels; ++l) {
     std::unordered_map<std::uint64_t, Index> mid;
     auto midpoint = [&](Index a, Index b) {
-      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+      const std::uint64_t key = undirected_edge_key(a, b);
       const auto it = mid.find(key);
       if (it != mid.end()) return it->second;
       m.positions.push_back(glm::normalize(m.positions[a] + m.positions[b]));

@@ -18,4 +18,11 @@ using FaceId = Index;
 /// Vertex of a mesh or of a Multi-Triangulation.
 using VertexId = Index;
 
+/// 64-bit key of the directed edge a -> b (a in the high half): equal keys, same directed edge.
+constexpr std::uint64_t directed_edge_key(Index a, Index b) noexcept { return (std::uint64_t{a} << 32) | b; }
+/// 64-bit key of the undirected edge {a, b}: the directed key from its smaller end.
+constexpr std::uint64_t undirected_edge_key(Index a, Index b) noexcept {
+  return a < b ? directed_edge_key(a, b) : directed_edge_key(b, a);
+}
+
 }  // namespace varmesh

@@ -13,7 +13,6 @@ namespace varmesh {
 
 namespace {
 
-std::uint64_t edge_key(Index a, Index b) { return (static_cast<std::uint64_t>(a) << 32) | b; }
 
 struct UnionFind {
   std::vector<Index> p;
@@ -84,7 +83,7 @@ ManifoldInput make_manifold_input(const TriMesh& mesh, NonManifoldPolicy policy)
     edges.reserve(corners.size());
     for (std::size_t i = 0; i < kept.size(); ++i)
       for (int k = 0; k < 3; ++k)
-        edges.push_back({edge_key(corners[3 * i + k], corners[3 * i + (k + 1) % 3]), static_cast<Index>(3 * i + k)});
+        edges.push_back({directed_edge_key(corners[3 * i + k], corners[3 * i + (k + 1) % 3]), static_cast<Index>(3 * i + k)});
     std::sort(edges.begin(), edges.end());
     std::vector<std::uint8_t> conflict(corners.size(), 0);  // per corner slot k: edge k conflicts
     for (std::size_t i = 1; i < edges.size(); ++i)
@@ -115,11 +114,11 @@ ManifoldInput make_manifold_input(const TriMesh& mesh, NonManifoldPolicy policy)
     edges.reserve(corners.size());
     for (std::size_t i = 0; i < kept.size(); ++i)
       for (int k = 0; k < 3; ++k)
-        edges.push_back({edge_key(corners[3 * i + k], corners[3 * i + (k + 1) % 3]), static_cast<Index>(3 * i + k)});
+        edges.push_back({directed_edge_key(corners[3 * i + k], corners[3 * i + (k + 1) % 3]), static_cast<Index>(3 * i + k)});
     std::sort(edges.begin(), edges.end());
     auto find_edge = [&](Index a, Index b) -> Index {
-      const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<std::uint64_t, Index>{edge_key(a, b), 0});
-      return (it != edges.end() && it->first == edge_key(a, b)) ? it->second : kInvalid;
+      const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<std::uint64_t, Index>{directed_edge_key(a, b), 0});
+      return (it != edges.end() && it->first == directed_edge_key(a, b)) ? it->second : kInvalid;
     };
     UnionFind uf(corners.size());
     for (std::size_t i = 0; i < kept.size(); ++i)
