@@ -329,10 +329,10 @@ int run_pm_build(const PmBuildArgs& a) {
   if (a.max_error >= 0.0f) o.max_error = a.max_error;
   o.target_faces = a.faces;
   o.target_vertices = a.vertices;
-  if (!(a.lt_finish == 0.0 || (a.lt_finish >= 1.0 && std::isfinite(a.lt_finish)))) {
+  if (!(a.lt_finish == 0.0 || (a.lt_finish > 1.0 && std::isfinite(a.lt_finish)))) {
     char given[32];
     std::snprintf(given, sizeof given, "%g", a.lt_finish);
-    throw InvalidInput(std::string("--lt-finish must be 0 or a number >= 1, not ") + given);
+    throw InvalidInput(std::string("--lt-finish must be 0 or a number > 1, not ") + given);
   }
   o.lt_finish = a.lt_finish;
   o.use_colors = a.colors;
@@ -360,7 +360,7 @@ int run_pm_build(const PmBuildArgs& a) {
               "depth %d; %.1f bytes per original face; %.3f s -> %s\n",
               st.collapses, st.rejected_link, st.rejected_flip, st.base_vertices, st.base_faces, h.num_roots(),
               h.max_depth(), double(h.memory_bytes()) / double(h.num_faces()), st.seconds, a.output.c_str());
-  if (st.lt_finished)
+  if (st.lt_finished && st.collapses > st.lt_finish_from)
     std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,
                 st.collapses, a.lt_finish);
   return 0;

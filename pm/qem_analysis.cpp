@@ -197,7 +197,7 @@ class Analysis {
   glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const;
   void set_edge(Index e, Index a, Index b);
   void reinsert_edges_of(Index v);
-  void switch_to_lt();
+  std::size_t switch_to_lt();  // returns the number of edges costed
   // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
   // rather than __builtin_prefetch. On the machine measured (a VM) the prefetches gained little; the same
   // reads as loads overlap.
@@ -448,7 +448,7 @@ void Analysis::set_edge(Index e, Index a, Index b) {
 
 // From here on the collapses are ordered and placed by Lindstrom-Turk's memoryless costs (QemOptions::lt_finish):
 // the planes of the live faces, and every live edge costed again (each once, from its lower slot).
-void Analysis::switch_to_lt() {
+std::size_t Analysis::switch_to_lt() {
   lt_ = true;
   volume_ = false;
   fplane_.resize(nf_);
@@ -472,6 +472,7 @@ void Analysis::switch_to_lt() {
     }
   }
   heap_.heapify();
+  return heap_.size();
 }
 
 void Analysis::reinsert_edges_of(Index v) {
@@ -1027,7 +1028,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
       finish_pending = false;
       stats.lt_finished = true;
       stats.lt_finish_from = stats.collapses;
-      switch_to_lt();
+      stats.lt_finish_edges = switch_to_lt();
     }
     if (heap_.empty()) {
       if (since_rebuild == 0) break;
@@ -1226,8 +1227,8 @@ VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& op
   if (!(options.color_weight > 0.0) || !std::isfinite(options.color_weight))
     throw InvalidInput("QemOptions::color_weight must be finite and > 0");
   if (std::isnan(options.max_error) || options.max_error < 0.0) throw InvalidInput("QemOptions::max_error must be >= 0");
-  if (!(options.lt_finish == 0.0 || (options.lt_finish >= 1.0 && std::isfinite(options.lt_finish))))
-    throw InvalidInput("QemOptions::lt_finish must be 0 or a finite number >= 1");
+  if (!(options.lt_finish == 0.0 || (options.lt_finish > 1.0 && std::isfinite(options.lt_finish))))
+    throw InvalidInput("QemOptions::lt_finish must be 0 or a finite number > 1");
   if (options.max_depth < 1 || options.max_depth > 62) throw InvalidInput("QemOptions::max_depth must be in [1, 62]");
   mesh.validate();
   ManifoldInput in;

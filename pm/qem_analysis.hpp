@@ -8,7 +8,7 @@
 /// vertex target, the last stretch (from QemOptions::lt_finish times the target on) is ordered and placed
 /// by Lindstrom-Turk costs.
 /// QemOptions::cost = CollapseCost::kLindstromTurk orders and places the collapses by Lindstrom-Turk's
-/// memoryless costs instead (lower error, slower: see CollapseCost). Legal means:
+/// memoryless costs all the way (slower; see CollapseCost). Legal means:
 /// - link condition: the common neighbours of vt and vu are exactly the apexes of the edge's faces (two, or
 ///   one on a border edge), and an interior edge does not join two border vertices (Hoppe et al. 1993);
 /// - no duplicate face appears (the tetrahedron case) and the component keeps at least 4 vertices;
@@ -46,9 +46,10 @@ enum class CollapseCost {
   /// the cost is the volume term plus edge length^2 times the border term (border_penalty is not used).
   /// Every collapse re-costs the edges at vs and marks those of its neighbours stale; a stale edge is placed
   /// again when it reaches the top of the queue (lazy evaluation): about 2x the time of kQuadric. At 1 % of
-  /// the faces it cuts the bunny's RMS error by a quarter and its max error by a seventh against the default
-  /// (by a third and a half against the plain GH97 placement; vertex-to-surface distance).
-  /// Ignored (kQuadric is used) when colours are used.
+  /// the faces it cuts the bunny's RMS error by a quarter and its max error by a seventh against quadrics to
+  /// the end (lt_finish = 0; by a third and a half against the plain GH97 placement; vertex-to-surface
+  /// distance), about as much as the default's Lindstrom-Turk finish does; unlike the finish it also shapes
+  /// hierarchies built with no target. Ignored (kQuadric is used) when colours are used.
   kLindstromTurk,
 };
 
@@ -78,8 +79,8 @@ struct QemOptions {
   /// quadrics carry the mesh cheaply through the fine levels, where any reasonable order is nearly as good;
   /// the last collapses, which decide the error at the target, are chosen on the current surface. At 1 % of
   /// the faces this brings the error to Lindstrom-Turk's own (bunny RMS 17.2 -> 13.3e-4 of the diagonal,
-  /// BENCHMARKS.md) for about 2 % more time. 0 turns it off; without a face or vertex target (max_error
-  /// only, or the smallest base mesh) it does not apply. Must be 0 or >= 1.
+  /// BENCHMARKS.md) for 5-8 % more time. 0 turns it off; without a face or vertex target (max_error only,
+  /// or the smallest base mesh) it does not apply. Must be 0 or > 1 (at 1 the target would come first).
   double lt_finish = 4.0;
   bool use_colors = false;     ///< GH98 attribute quadrics when the input has colours
   double color_weight = 1.0;   ///< colour unit = color_weight * bounding-box diagonal
@@ -96,6 +97,7 @@ struct QemStats {
   std::size_t queue_rebuilds = 0;  ///< extra passes over all edges once the queue ran dry
   bool lt_finished = false;        ///< the Lindstrom-Turk finish started (QemOptions::lt_finish)
   std::size_t lt_finish_from = 0;  ///< collapses done when it started (valid when lt_finished)
+  std::size_t lt_finish_edges = 0; ///< edges it costed then: every edge of the mesh at that point
   std::size_t base_vertices = 0, base_faces = 0;
   double seconds = 0.0;
 };
