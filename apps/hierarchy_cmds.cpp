@@ -18,6 +18,7 @@
 #include "fourk/simplify4k.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/heightfield.hpp"
+#include "multitri/mesh_distance.hpp"
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/mt_front.hpp"
@@ -81,12 +82,14 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
   sub.add_flag("--colors", a.colors, "colour quadrics (GH98) when the mesh has vertex colours");
   sub.add_option("--non-manifold", a.non_manifold, "split (default): cut non-manifold edges and vertices into sheets; "
                                                     "lock: also keep the copies from collapsing");
+  sub.add_flag("--measure", a.measure, "report the RMS and max distance from the input's vertices to the base mesh");
   sub.add_flag("--quiet", a.quiet, "no progress on stderr");
 }
 
 void add_pm_query_options(CLI::App& sub, PmQueryArgs& a) {
   add_view_query_options(sub, a, ".vmh file from varmesh pm build");
   sub.add_option("--scheme", a.scheme, "kim-lee (default), hoppe97 or xia-varshney: the dependency rules of the refinement");
+  sub.add_flag("--measure", a.measure, "report the RMS and max distance from the original mesh's vertices to the result");
 }
 
 namespace {
@@ -318,6 +321,15 @@ int run_query(const QueryArgs& a) {
   return 0;
 }
 
+namespace {
+// The metric of BENCHMARKS.md (issue 3): every original vertex to the nearest triangle.
+void print_distance(const char* what, const SurfaceDistance& d) {
+  const double rel = d.diagonal > 0.0 ? 1e4 / d.diagonal : 0.0;
+  std::printf("%s: distance from the %zu original vertices: RMS %.6g, max %.6g (%.2f / %.2f e-4 of the bounding-box "
+              "diagonal %.6g)\n", what, d.points, d.rms, d.max, d.rms * rel, d.max * rel, d.diagonal);
+}
+}  // namespace
+
 int run_pm_build(const PmBuildArgs& a) {
   if (!is_mesh_file(a.input)) throw InvalidInput("pm build: INPUT must be a mesh (.obj, .off, .ply), not '" + a.input + "'");
   if (std::filesystem::path(a.output).extension() != ".vmh") throw InvalidInput("pm build: -o must end in .vmh, not '" + a.output + "'");
@@ -363,6 +375,7 @@ int run_pm_build(const PmBuildArgs& a) {
   if (st.lt_finished && st.collapses > st.lt_finish_from)
     std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,
                 st.collapses, a.lt_finish);
+  if (a.measure) print_distance("base mesh", vertex_to_surface_distance(mesh, mesh_after_collapses(h, h.num_collapses())));
   return 0;
 }
 
@@ -383,6 +396,7 @@ int run_pm_query(const PmQueryArgs& a) {
   std::printf("%s: %zu vertices, %zu triangles (%zu vsplits, %zu forced, %zu ecols, %zu forced, #DC %zu%s) in %.2f ms -> %s\n",
               scheme_name(scheme), mesh.num_vertices(), mesh.num_faces(), s.vsplits, s.forced_vsplits, s.ecols,
               s.forced_ecols, s.degenerate_cases, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  if (a.measure) print_distance("result", vertex_to_surface_distance(mesh_after_collapses(h, 0), mesh));
   return 0;
 }
 

@@ -43,12 +43,14 @@ struct PmBuildArgs {
   double lt_finish = 4.0;         ///< QemOptions::lt_finish (quadric costs; 0: off)
   bool colors = false;            ///< GH98 colour quadrics when the mesh has vertex colours
   std::string non_manifold = "split";  ///< split | lock
+  bool measure = false;           ///< report the distance from the input's vertices to the base mesh
   bool quiet = false;
 };
 
 /// `varmesh pm query`: a selectively refined mesh of a .vmh hierarchy under one of the three schemes.
 struct PmQueryArgs : ViewQueryArgs {
   std::string scheme = "kim-lee";  ///< kim-lee | hoppe97 | xia-varshney
+  bool measure = false;            ///< report the distance from the original vertices to the result
 };
 
 void add_build_options(CLI::App& sub, BuildArgs& args);

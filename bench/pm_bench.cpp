@@ -53,6 +53,7 @@
 
 #include "multitri/bounds.hpp"
 #include "multitri/camera.hpp"
+#include "multitri/mesh_distance.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
 #include "pm/qem_analysis.hpp"
@@ -96,163 +97,18 @@ double percentile(std::vector<double> v, double p) {
 Lap Laps::med() const { return {median(wall), median(cpu)}; }
 Lap Laps::p95() const { return {percentile(wall, 0.95), percentile(cpu, 0.95)}; }
 
-// ---- distance from points to a triangle soup: a BVH over the (few) simplified triangles ----
-
-double point_segment_sq(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
-  const glm::dvec3 ab = b - a;
-  const double len2 = glm::dot(ab, ab);
-  const double t = len2 > 0.0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-  const glm::dvec3 d = p - (a + t * ab);
-  return glm::dot(d, d);
-}
-
-// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5), squared distance.
-double point_triangle_sq(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  auto sq = [&](const glm::dvec3& q) { const glm::dvec3 d = p - q; return glm::dot(d, d); };
-  if (d1 <= 0.0 && d2 <= 0.0) return sq(a);
-  const glm::dvec3 bp = p - b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) return sq(b);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return sq(a + ab * (d1 / (d1 - d3)));
-  const glm::dvec3 cp = p - c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) return sq(c);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return sq(a + ac * (d2 / (d2 - d6)));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return sq(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-  const double denom = va + vb + vc;
-  if (!(std::abs(denom) > 0.0))  // zero-area triangle: its edges are the whole of it
-    return std::min({point_segment_sq(p, a, b), point_segment_sq(p, b, c), point_segment_sq(p, c, a)});
-  const double v = vb / denom, w = vc / denom;
-  return sq(a + ab * v + ac * w);
-}
-
-class TriangleBvh {
- public:
-  TriangleBvh(std::span<const glm::vec3> positions, std::span<const Index> indices) {
-    const std::size_t nt = indices.size() / 3;
-    std::vector<Index> order(nt);
-    std::iota(order.begin(), order.end(), Index{0});
-    std::vector<glm::vec3> centroid(nt);
-    for (std::size_t t = 0; t < nt; ++t)
-      centroid[t] = (positions[indices[3 * t]] + positions[indices[3 * t + 1]] + positions[indices[3 * t + 2]]) / 3.0f;
-    nodes_.reserve(2 * nt + 1);
-    if (nt > 0) build(order, 0, nt, centroid, positions, indices);
-    tri_.reserve(3 * nt);
-    for (Index t : order)
-      for (int k = 0; k < 3; ++k) tri_.push_back(glm::dvec3(positions[indices[3 * t + static_cast<std::size_t>(k)]]));
-  }
-
-  double nearest_sq(const glm::dvec3& p) const {
-    double best = 1e300;
-    if (nodes_.empty()) return best;
-    Index stack[128];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& n = nodes_[stack[--top]];
-      if (box_sq(n, p) >= best) continue;
-      if (n.count > 0) {
-        for (Index t = n.first; t < n.first + n.count; ++t)
-          best = std::min(best, point_triangle_sq(p, tri_[3 * t], tri_[3 * t + 1], tri_[3 * t + 2]));
-        continue;
-      }
-      const Index l = n.left, r = n.right;
-      const double dl = box_sq(nodes_[l], p), dr = box_sq(nodes_[r], p);
-      // Push the farther child first so the nearer one is visited next.
-      if (dl < dr) {
-        if (dr < best) stack[top++] = r;
-        if (dl < best) stack[top++] = l;
-      } else {
-        if (dl < best) stack[top++] = l;
-        if (dr < best) stack[top++] = r;
-      }
-    }
-    return best;
-  }
-
- private:
-  struct Node {
-    glm::vec3 lo, hi;
-    Index first = 0, count = 0;  // leaf: triangles [first, first+count); inner: count == 0
-    Index left = 0, right = 0;   // inner: children
-  };
-  static double box_sq(const Node& n, const glm::dvec3& p) {
-    double s = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const double lo = n.lo[k], hi = n.hi[k];
-      const double d = p[k] < lo ? lo - p[k] : (p[k] > hi ? p[k] - hi : 0.0);
-      s += d * d;
-    }
-    return s;
-  }
-  Index build(std::vector<Index>& order, std::size_t begin, std::size_t end, const std::vector<glm::vec3>& centroid,
-              std::span<const glm::vec3> positions, std::span<const Index> indices) {
-    const Index id = static_cast<Index>(nodes_.size());
-    nodes_.push_back({});
-    Node n;
-    n.lo = glm::vec3(1e30f);
-    n.hi = glm::vec3(-1e30f);
-    glm::vec3 clo(1e30f), chi(-1e30f);
-    for (std::size_t i = begin; i < end; ++i) {
-      const Index t = order[i];
-      for (int k = 0; k < 3; ++k) {
-        const glm::vec3& q = positions[indices[3 * t + static_cast<std::size_t>(k)]];
-        n.lo = glm::min(n.lo, q);
-        n.hi = glm::max(n.hi, q);
-      }
-      clo = glm::min(clo, centroid[t]);
-      chi = glm::max(chi, centroid[t]);
-    }
-    if (end - begin <= 4) {
-      n.first = static_cast<Index>(begin);
-      n.count = static_cast<Index>(end - begin);
-      nodes_[id] = n;
-      return id;
-    }
-    const glm::vec3 ext = chi - clo;
-    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
-    const std::size_t mid = (begin + end) / 2;
-    std::nth_element(order.begin() + static_cast<std::ptrdiff_t>(begin), order.begin() + static_cast<std::ptrdiff_t>(mid),
-                     order.begin() + static_cast<std::ptrdiff_t>(end),
-                     [&](Index a, Index b) { return centroid[a][axis] < centroid[b][axis]; });
-    n.left = build(order, begin, mid, centroid, positions, indices);
-    n.right = build(order, mid, end, centroid, positions, indices);
-    nodes_[id] = n;
-    return id;
-  }
-
-  std::vector<Node> nodes_;
-  std::vector<glm::dvec3> tri_;
-};
+// ---- the distance metric: every original vertex to the nearest triangle of the result ----
 
 struct Distance {
   double rms = 0.0, max = 0.0;  // over the bounding-box diagonal of the original
 };
 
-// Distance from every vertex referenced by `original` to the surface (positions, indices).
 Distance distance_to(const TriMesh& original, std::span<const glm::vec3> positions, std::span<const Index> indices) {
-  Box3 box;
-  std::vector<std::uint8_t> used(original.num_vertices(), 0);
-  for (Index v : original.indices) used[v] = 1;
-  for (std::size_t v = 0; v < used.size(); ++v)
-    if (used[v]) box.add(original.positions[v]);
-  const double diag = box.diagonal();
-  const TriangleBvh bvh(positions, indices);
-  double sum = 0.0, mx = 0.0;
-  std::size_t n = 0;
-  for (std::size_t v = 0; v < used.size(); ++v) {
-    if (!used[v]) continue;
-    const double d2 = bvh.nearest_sq(glm::dvec3(original.positions[v]));
-    sum += d2;
-    mx = std::max(mx, d2);
-    ++n;
-  }
-  return {std::sqrt(sum / static_cast<double>(std::max<std::size_t>(n, 1))) / diag, std::sqrt(mx) / diag};
+  TriMesh result;
+  result.positions.assign(positions.begin(), positions.end());
+  result.indices.assign(indices.begin(), indices.end());
+  const SurfaceDistance d = vertex_to_surface_distance(original, result);
+  return {d.rms / d.diagonal, d.max / d.diagonal};
 }
 
 // ---- peers: meshoptimizer and OpenMesh's decimater ----

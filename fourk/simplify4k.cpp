@@ -7,8 +7,7 @@
 // modifications, non-redundancy). The projection-mode bound is the "successive mapping" idea of J. Cohen,
 // D. Manocha, M. Olano, "Simplifying polygonal models using successive mappings" (1997): one planar
 // projection shared by the old and new triangulations gives a point-to-point correspondence whose distance
-// is affine on the cells of their overlay. The closest point on a triangle follows the region
-// classification of C. Ericson, "Real-Time Collision Detection" (2005), 5.1.5.
+// is affine on the cells of their overlay. Point-to-triangle distances come from multitri/mesh_distance.hpp.
 //
 // Why plans: removing a vertex v of degree d by d - 4 spoke swaps and one 4 -> 2 collapse retriangulates v's
 // star polygon, and every triangulation of a polygon can be peeled ear by ear down to a quadrilateral, so
@@ -33,6 +32,7 @@
 #include <glm/vec3.hpp>
 
 #include "multitri/errors.hpp"
+#include "multitri/mesh_distance.hpp"
 
 namespace varmesh {
 
@@ -60,36 +60,6 @@ struct TripleHash {
   }
 };
 
-// Distance from p to the closed triangle abc (Ericson 5.1.5: Voronoi regions of vertices, edges, face).
-double point_triangle_distance(const DVec& p, const DVec& a, const DVec& b, const DVec& c) {
-  const DVec ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return glm::length(ap);
-  const DVec bp = p - b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) return glm::length(bp);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return glm::length(p - (a + ab * (d1 / (d1 - d3))));
-  const DVec cp = p - c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) return glm::length(cp);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return glm::length(p - (a + ac * (d2 / (d2 - d6))));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0)
-    return glm::length(p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))));
-  const double denom = va + vb + vc;
-  if (!(denom > 0.0)) {  // degenerate triangle: nearest of its three edges
-    auto seg = [&](const DVec& s, const DVec& t) {
-      const DVec st = t - s;
-      const double l2 = glm::dot(st, st);
-      const double u = l2 > 0.0 ? std::clamp(glm::dot(p - s, st) / l2, 0.0, 1.0) : 0.0;
-      return glm::length(p - (s + st * u));
-    };
-    return std::min({seg(a, b), seg(b, c), seg(c, a)});
-  }
-  return glm::length(p - (a + ab * (vb / denom) + ac * (vc / denom)));
-}
 
 // Unit normal (zero when degenerate) and radius-ratio quality 4*sqrt(3)*area / sum of squared edges.
 struct FaceShape {
@@ -518,7 +488,7 @@ bool Simplifier::try_step(Search& s, NodeKind kind, std::span<const Index> old,
         double d = 0.0;
         for (VertexId c : t.v)
           if (std::find(nf[i].v.begin(), nf[i].v.end(), c) == nf[i].v.end())
-            d = std::max(d, point_triangle_distance(pos_[c], pos_[nf[i].v[0]], pos_[nf[i].v[1]], pos_[nf[i].v[2]]));
+            d = std::max(d, std::sqrt(point_triangle_distance_sq(pos_[c], pos_[nf[i].v[0]], pos_[nf[i].v[1]], pos_[nf[i].v[2]])));
         if (d < best) {
           best = d;
           at = i;
