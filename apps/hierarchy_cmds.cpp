@@ -64,6 +64,7 @@ void add_view_query_options(CLI::App& sub, ViewQueryArgs& a, const char* hierarc
 void add_query_options(CLI::App& sub, QueryArgs& a) {
   add_view_query_options(sub, a, ".vrm file from varmesh build");
   sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
+  sub.add_flag("--measure", a.measure, "report the RMS and max distance from the finest mesh's vertices to the result");
 }
 
 void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
@@ -291,6 +292,15 @@ int run_build(const BuildArgs& a) {
   return 0;
 }
 
+namespace {
+// The metric of BENCHMARKS.md (issue 3): every original vertex to the nearest triangle.
+void print_distance(const char* what, const SurfaceDistance& d, const char* from = "original") {
+  const double rel = d.diagonal > 0.0 ? 1e4 / d.diagonal : 0.0;
+  std::printf("%s: distance from the %zu %s vertices: RMS %.6g, max %.6g (%.2f / %.2f e-4 of the bounding-box "
+              "diagonal %.6g)\n", what, d.points, from, d.rms, d.max, d.rms * rel, d.max * rel, d.diagonal);
+}
+}  // namespace
+
 int run_query(const QueryArgs& a) {
   require_mesh_output(a.output, "query");
   require_png(a.png, "query");
@@ -318,17 +328,15 @@ int run_query(const QueryArgs& a) {
   const auto [st, mesh, ms] = extract_and_write(front, parts, a);
   std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
               st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  if (a.measure) {
+    MtFront finest(mt);  // every node applied: nodes are numbered parents first
+    for (NodeId n = 0; n < mt.num_nodes(); ++n)
+      if (!finest.is_applied(n)) finest.apply(n);
+    print_distance("result", vertex_to_surface_distance(finest.to_mesh(), mesh), "finest mesh");
+  }
   return 0;
 }
 
-namespace {
-// The metric of BENCHMARKS.md (issue 3): every original vertex to the nearest triangle.
-void print_distance(const char* what, const SurfaceDistance& d) {
-  const double rel = d.diagonal > 0.0 ? 1e4 / d.diagonal : 0.0;
-  std::printf("%s: distance from the %zu original vertices: RMS %.6g, max %.6g (%.2f / %.2f e-4 of the bounding-box "
-              "diagonal %.6g)\n", what, d.points, d.rms, d.max, d.rms * rel, d.max * rel, d.diagonal);
-}
-}  // namespace
 
 int run_pm_build(const PmBuildArgs& a) {
   if (!is_mesh_file(a.input)) throw InvalidInput("pm build: INPUT must be a mesh (.obj, .off, .ply), not '" + a.input + "'");

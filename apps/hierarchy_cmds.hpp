@@ -28,6 +28,7 @@ struct ViewQueryArgs {
   float pixels = 1.0f, viewport = 1080.0f;
   std::size_t budget = 0;
   std::string up, view;   ///< --png: "x,y,z" up axis and direction towards the eye (empty: defaults)
+  bool measure = false;   ///< report the distance from the finest (pm: original) mesh's vertices to the result
 };
 
 struct QueryArgs : ViewQueryArgs {
@@ -50,7 +51,6 @@ struct PmBuildArgs {
 /// `varmesh pm query`: a selectively refined mesh of a .vmh hierarchy under one of the three schemes.
 struct PmQueryArgs : ViewQueryArgs {
   std::string scheme = "kim-lee";  ///< kim-lee | hoppe97 | xia-varshney
-  bool measure = false;            ///< report the distance from the original vertices to the result
 };
 
 void add_build_options(CLI::App& sub, BuildArgs& args);

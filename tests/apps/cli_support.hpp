@@ -2,11 +2,13 @@
 // Running the varmesh executable from the CLI tests: exit status, stdout and stderr of one command.
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 
 namespace varmesh::testing {
 
@@ -31,6 +33,17 @@ inline CmdResult run_varmesh(const std::string& args, const std::filesystem::pat
 }
 
 inline bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// The RMS and max (object units) of the line "<what>: distance from the ..." that --measure prints, or NaN
+/// when there is no such line.
+inline std::pair<double, double> measured_distance(const std::string& out, const std::string& what) {
+  const double nan = std::nan("");
+  const std::size_t at = out.find(what + ": distance from the ");
+  if (at == std::string::npos) return {nan, nan};
+  const std::size_t rms = out.find("RMS ", at), max = out.find(", max ", at);
+  if (rms == std::string::npos || max == std::string::npos) return {nan, nan};
+  return {std::stod(out.substr(rms + 4)), std::stod(out.substr(max + 6))};
+}
 
 inline int count_lines(const std::string& s) {
   int n = 0;

@@ -13,6 +13,7 @@
 #include "fourk/grid48.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/image.hpp"
+#include "multitri/mesh_distance.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/terrain_gen.hpp"
 #include "apps/cli_support.hpp"
@@ -144,7 +145,16 @@ TEST(Cli, BuildThenQueryAdaptiveTorus) {
   // Finer where the ramp asks for small triangles (x < 0) than where it allows large ones.
   std::size_t left = 0, right = 0;
   for (std::size_t f = 0; f < ramp.num_faces(); ++f) (ramp.positions[ramp.indices[3 * f]].x < 0 ? left : right)++;
-  EXPECT_GT(left, right);
+  EXPECT_GT(left, right);  // --measure: the distance from the finest mesh's vertices, as the library measures it (0 for the finest).
+  r = run("query " + (dir / "t.vrm").string() + " --ramp -3,0,0,3,0,0,0.2,3 --measure -o " + (dir / "ramp.obj").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const SurfaceDistance want = vertex_to_surface_distance(fine, read_mesh((dir / "ramp.obj").string()));
+  EXPECT_GT(want.rms, 0.0);
+  EXPECT_NEAR(testing::measured_distance(r.out, "result").first, want.rms, 1e-5 * want.rms) << r.out;
+  EXPECT_NEAR(testing::measured_distance(r.out, "result").second, want.max, 1e-5 * want.max) << r.out;
+  r = run("query " + (dir / "t.vrm").string() + " --error 0 --measure -o " + (dir / "fine.obj").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(testing::measured_distance(r.out, "result").second, 0.0) << r.out;
 }
 
 TEST(Cli, QueryPictureCameraOptions) {

@@ -76,15 +76,6 @@ TEST(PmCli, BuildWritesTheHierarchyTheLibraryReads) {
   }
 }
 
-// The RMS and max a --measure line prints (object units), or NaN when the line is missing.
-std::pair<double, double> measured(const std::string& out, const std::string& what) {
-  const std::size_t at = out.find(what + ": distance from the ");
-  if (at == std::string::npos) return {std::nan(""), std::nan("")};
-  const std::size_t rms = out.find("RMS ", at), max = out.find(", max ", at);
-  if (rms == std::string::npos || max == std::string::npos) return {std::nan(""), std::nan("")};
-  return {std::stod(out.substr(rms + 4)), std::stod(out.substr(max + 6))};
-}
-
 // --measure reports the library's vertex-to-surface distance: for pm build from the input's vertices to the
 // base mesh, for pm query from the original vertices to the extracted mesh (0 at full resolution).
 TEST(PmCli, MeasureReportsTheDistanceToTheOriginal) {
@@ -93,21 +84,21 @@ TEST(PmCli, MeasureReportsTheDistanceToTheOriginal) {
   ASSERT_EQ(built.status, 0) << built.err;
   const VertexHierarchy h = read_vertex_hierarchy(b.vmh.string());
   const SurfaceDistance want = vertex_to_surface_distance(read_mesh(b.mesh.string()), mesh_after_collapses(h, h.num_collapses()));
-  const auto [rms, max] = measured(built.out, "base mesh");
+  const auto [rms, max] = testing::measured_distance(built.out, "base mesh");
   EXPECT_GT(want.rms, 0.0);
   EXPECT_NEAR(rms, want.rms, 1e-5 * want.rms) << built.out;
   EXPECT_NEAR(max, want.max, 1e-5 * want.max) << built.out;
   const fs::path out = b.dir / "q.obj";
   CmdResult q = run("pm query " + b.vmh.string() + " --error 0 --measure -o " + out.string(), b.dir);
   ASSERT_EQ(q.status, 0) << q.err;
-  EXPECT_EQ(measured(q.out, "result").second, 0.0) << q.out;
+  EXPECT_EQ(testing::measured_distance(q.out, "result").second, 0.0) << q.out;
   q = run("pm query " + b.vmh.string() + " --budget 150 --measure -o " + out.string(), b.dir);
   ASSERT_EQ(q.status, 0) << q.err;
   const SurfaceDistance coarse = vertex_to_surface_distance(read_mesh(b.mesh.string()), read_mesh(out.string()));
-  EXPECT_NEAR(measured(q.out, "result").first, coarse.rms, 1e-5 * coarse.rms) << q.out;
+  EXPECT_NEAR(testing::measured_distance(q.out, "result").first, coarse.rms, 1e-5 * coarse.rms) << q.out;
   // Without the flag, no measurement line.
   q = run("pm query " + b.vmh.string() + " --budget 150 -o " + out.string(), b.dir);
-  EXPECT_TRUE(std::isnan(measured(q.out, "result").first)) << q.out;
+  EXPECT_TRUE(std::isnan(testing::measured_distance(q.out, "result").first)) << q.out;
 }
 
 TEST(PmCli, QueryRefinesUnderEachScheme) {
