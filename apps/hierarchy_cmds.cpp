@@ -123,6 +123,12 @@ void print_metrics(const Mt& mt) {
   std::printf("hierarchy: %zu nodes, %zu faces (%zu coarsest, %zu finest), %zu vertices, depth %zu, growth %.3f, %.1f bytes per finest face\n",
               m.nodes, m.faces, m.coarsest_faces, m.finest_faces, mt.num_vertices(), m.depth, m.growth_rate,
               double(mt.memory_bytes()) / double(std::max<std::size_t>(1, m.finest_faces)));
+  // Eq. 5 of Velho-Gomes in the chain reading (mt_metrics.hpp), for hierarchies small enough to walk.
+  if (const ChainGrowth g = chain_growth(mt); g.computed && m.nodes > 0) {
+    const double n = static_cast<double>(m.coarsest_faces) / 2.0;
+    std::printf("chain growth %.6f (a chain of %zu, closure %zu); eq. 5 with n = |K0|/2 = %g: %.6f\n", g.max_growth,
+                g.argmax_length, g.argmax_closure, n, (n + 2.0) / (n + 1.0));
+  }
 }
 
 // The pictures' camera: the default 3/4 view, or picture_camera_for when --up or --view is given.

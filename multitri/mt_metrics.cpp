@@ -175,6 +175,47 @@ MtMetrics compute_metrics(const Mt& mt) {
   return m;
 }
 
+ChainGrowth chain_growth(const Mt& mt, std::size_t max_nodes) {
+  ChainGrowth g;
+  const std::size_t nn = mt.num_nodes();
+  if (nn == 0 || nn - 1 > max_nodes) return g;
+  g.computed = true;
+  const double base = static_cast<double>(mt.image_size(Mt::source()));
+  // Longest-image chain into each node (parents first: node ids are a topological order).
+  std::vector<double> chain(nn, 0.0);
+  std::vector<std::size_t> length(nn, 0);
+  for (NodeId v = 1; v < nn; ++v) {
+    double best = 0.0;
+    std::size_t best_len = 0;
+    for (NodeId p : mt.parents(v))
+      if (p != Mt::source() && (chain[p] > best || (chain[p] == best && length[p] > best_len)))
+        best = chain[p], best_len = length[p];
+    chain[v] = best + static_cast<double>(mt.image_size(v));
+    length[v] = best_len + 1;
+  }
+  // The closure of each end node, by a stamped walk up its ancestors.
+  std::vector<std::uint32_t> seen(nn, 0);
+  std::vector<NodeId> stack;
+  for (NodeId v = 1; v < nn; ++v) {
+    const auto stamp = static_cast<std::uint32_t>(v);
+    double net = 0.0;
+    std::size_t closure = 0;
+    stack.assign(1, v);
+    seen[v] = stamp;
+    while (!stack.empty()) {
+      const NodeId u = stack.back();
+      stack.pop_back();
+      ++closure;
+      net += static_cast<double>(mt.image_size(u)) - static_cast<double>(mt.pre_image(u).size());
+      for (NodeId p : mt.parents(u))
+        if (p != Mt::source() && seen[p] != stamp) seen[p] = stamp, stack.push_back(p);
+    }
+    const double growth = (base + chain[v]) / (base + net);
+    if (growth > g.max_growth) g.max_growth = growth, g.argmax_end = v, g.argmax_length = length[v], g.argmax_closure = closure;
+  }
+  return g;
+}
+
 LevelFrontCount count_level_fronts(const Mt& mt) {
   LevelFrontCount r;
   const std::vector<Index> level = compute_node_levels(mt);

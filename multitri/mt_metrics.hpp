@@ -68,8 +68,9 @@ struct MtMetrics {
   std::size_t depth = 0;           ///< max level; see the header comment (0 for an Mt with no node)
   /// nodes_per_level[j] = number of nodes of level j; nodes_per_level[0] = 1 (the source); size depth + 1.
   std::vector<std::size_t> nodes_per_level;
-  /// Growth rate (Velho-Gomes 3.3: "the ratio between the size of the longest sequence of modifications
-  /// and the size of its cumulative application to a mesh"). The longest sequence is one that applies every
+  /// Growth rate (Velho-Gomes 3.3: the size of the longest sequence of modifications over the size of the
+  /// mesh its cumulative application gives), read here for the sequence that applies every modification
+  /// (see ChainGrowth for the chain reading that eq. 5 fits). The longest sequence is one that applies every
   /// modification (a linear extension of the DAG, the compatible sequence K0..Kn of Velho-Gomes 3.1); its
   /// size is the number of faces it creates, source included (= faces); its cumulative application is the
   /// finest mesh. So growth_rate = faces / finest_faces. It is >= 1, and it is bounded by a constant (the
@@ -85,6 +86,29 @@ std::vector<Index> compute_node_levels(const Mt& mt);
 
 /// Sizes, depth, per-level counts and growth rate. O(nodes + faces + arcs).
 MtMetrics compute_metrics(const Mt& mt);
+
+/// Growth of chains (Velho-Gomes 3.3 read for eq. 5 of section 7.2). A chain is a sequence of modifications
+/// W_1..W_k in which each W_i consumes a face that W_(i-1) created (a path of the node DAG that avoids the
+/// source); its cumulative application to the base mesh K0 applies the chain with everything it needs, i.e.
+/// the closure C = all ancestors of W_k (W_k included, source excluded). Its growth is
+///   (|K0| + sum over the chain of |image(W_i)|) / (|K0| + sum over C of (|image| - |pre-image|)):
+/// the faces of K0 and of the sequence itself against the faces of the mesh it yields. For a 4-8 split
+/// (2 -> 4) a chain of length k yields a closure of at least 2k - 1 nodes when every split past the first
+/// level has two distinct parents, so the growth is at most (|K0| + 4k) / (|K0| + 4k - 2), largest for one
+/// split: (n + 2) / (n + 1) with n = |K0| / 2 the two-face clusters covering K0, which is eq. 5.
+struct ChainGrowth {
+  bool computed = false;         ///< false when the Mt exceeded max_nodes (nothing else is set)
+  double max_growth = 0.0;       ///< over all chains; 0 for an Mt with no node
+  NodeId argmax_end = kInvalid;  ///< the last node of a chain reaching it
+  std::size_t argmax_length = 0; ///< that chain's length k
+  std::size_t argmax_closure = 0;///< and its closure's size
+};
+
+/// The largest chain growth, over chains ending at every node (for an end node the longest-image path into
+/// it gives the largest numerator; the denominator depends on the end node only). O(sum of closure sizes)
+/// time, which is O(nodes * depth^2) on 4-8 structures: refused (computed = false) above max_nodes
+/// non-source nodes.
+ChainGrowth chain_growth(const Mt& mt, std::size_t max_nodes = std::size_t(1) << 16);
 
 /// Result of a front count.
 struct FrontCount {

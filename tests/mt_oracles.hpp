@@ -1,8 +1,11 @@
 #pragma once
 // Slow oracles shared by the test suites.
+#include <algorithm>
 #include <cstdint>
+#include <functional>
 
 #include "multitri/mt.hpp"
+#include "multitri/mt_front.hpp"
 
 namespace varmesh::testing {
 
@@ -20,6 +23,28 @@ inline std::uint64_t brute_force_fronts(const Mt& mt) {
     count += ok;
   }
   return count;
+}
+
+/// The largest chain growth (mt_metrics.hpp, ChainGrowth) by brute force on a small MT: every chain (path of
+/// non-source nodes, each a parent of the next) is enumerated, and its cumulative application is measured
+/// by refining its last node in a fresh MtFront (which applies exactly the ancestors) and counting faces.
+inline double brute_force_chain_growth(const Mt& mt) {
+  const double base = static_cast<double>(mt.image_size(Mt::source()));
+  double best = 0.0;
+  for (NodeId end = 1; end < mt.num_nodes(); ++end) {
+    MtFront front(mt);
+    front.refine(end);
+    const double mesh = static_cast<double>(front.num_faces());
+    // Every path into `end`, by its image sum.
+    std::function<void(NodeId, double)> walk = [&](NodeId v, double images) {
+      images += static_cast<double>(mt.image_size(v));
+      best = std::max(best, (base + images) / mesh);
+      for (NodeId p : mt.parents(v))
+        if (p != Mt::source()) walk(p, images);
+    };
+    walk(end, 0.0);
+  }
+  return best;
 }
 
 }  // namespace varmesh::testing

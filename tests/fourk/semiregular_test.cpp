@@ -784,6 +784,38 @@ TEST(SemiRegular, ExpressivePowerAgainstEq4) {
   }
 }
 
+// Eq. 5 of Velho-Gomes 7.2 in the chain reading of mt_metrics.hpp (see bisection_test.cpp for the
+// tetrahedron): on closed surfaces every split past the first level has two distinct parents, and the
+// largest growth is that of one split, (n + 2) / (n + 1) with n = |K0| / 2 two-face clusters. On a surface
+// with a border the bound needs that assumption: a border split (1 -> 2) has one parent, and a chain through
+// border splits exceeds it (by little: it stays below 2, the image / pre-image ratio).
+TEST(SemiRegular, ChainGrowthMeetsEq5OnClosedSurfaces) {
+  struct Closed {
+    std::string name;
+    TriMesh mesh;
+    int levels;
+  };
+  const std::vector<Closed> closed{{"tetrahedron", tetrahedron(), 6}, {"icosahedron", icosahedron(), 5},
+                                 {"torus(7,5)", torus(7, 5), 4}, {"torus(3,3)", torus(3, 3), 4}};
+  for (const Closed& c : closed)
+    for (int m = 1; m <= c.levels; ++m) {
+      const Mt mt = build_semiregular_mt(c.mesh, m);
+      const double n = static_cast<double>(mt.image_size(Mt::source())) / 2.0;
+      const ChainGrowth g = chain_growth(mt);
+      ASSERT_TRUE(g.computed);
+      EXPECT_DOUBLE_EQ(g.max_growth, (n + 2.0) / (n + 1.0)) << c.name << " m=" << m;
+      if (mt.num_nodes() <= 200) {
+        EXPECT_DOUBLE_EQ(g.max_growth, testing::brute_force_chain_growth(mt)) << c.name << " m=" << m;
+      }
+    }
+  const Mt open = build_semiregular_mt(square(), 3);
+  const double n = static_cast<double>(open.image_size(Mt::source())) / 2.0;
+  const ChainGrowth g = chain_growth(open);
+  EXPECT_GT(g.max_growth, (n + 2.0) / (n + 1.0));
+  EXPECT_LT(g.max_growth, 2.0);
+  EXPECT_DOUBLE_EQ(g.max_growth, testing::brute_force_chain_growth(open));
+}
+
 TEST(SemiRegular, ZeroLevelsIsTheBaseMesh) {
   const Mt mt = build_semiregular_mt(icosahedron(), 0);
   mt.validate();
