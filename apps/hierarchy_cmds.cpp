@@ -118,15 +118,17 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   return build_adaptive_heightfield(field, o);
 }
 
-void print_metrics(const Mt& mt) {
+void print_metrics(const Mt& mt, bool semiregular = false) {
   const MtMetrics m = compute_metrics(mt);
   std::printf("hierarchy: %zu nodes, %zu faces (%zu coarsest, %zu finest), %zu vertices, depth %zu, growth %.3f, %.1f bytes per finest face\n",
               m.nodes, m.faces, m.coarsest_faces, m.finest_faces, mt.num_vertices(), m.depth, m.growth_rate,
               double(mt.memory_bytes()) / double(std::max<std::size_t>(1, m.finest_faces)));
-  // Eq. 5 of Velho-Gomes in the chain reading (mt_metrics.hpp), for hierarchies small enough to walk.
+  // Semi-regular 4-8 structures: the chain growth of mt_metrics.hpp beside eq. 5's value with n = |K0|/2
+  // (README: a constructed reading of Velho-Gomes 3.3; not the paper's own n).
+  if (!semiregular) return;
   if (const ChainGrowth g = chain_growth(mt); g.computed && m.nodes > 0) {
     const double n = static_cast<double>(m.coarsest_faces) / 2.0;
-    std::printf("chain growth %.6f (a chain of %zu, closure %zu); eq. 5 with n = |K0|/2 = %g: %.6f\n", g.max_growth,
+    std::printf("chain growth %.6f (a chain of %zu, closure %zu); (n+2)/(n+1) with n = |K0|/2 = %g: %.6f\n", g.max_growth,
                 g.argmax_length, g.argmax_closure, n, (n + 2.0) / (n + 1.0));
   }
 }
@@ -293,7 +295,7 @@ int run_build(const BuildArgs& a) {
   const double ms = watch.ms();
   write_mt(a.output, mt);
   write_pictures(a.pictures, pictures, a.output);
-  print_metrics(mt);
+  print_metrics(mt, a.method == "semiregular");
   std::printf("built in %.1f ms -> %s\n", ms, a.output.c_str());
   return 0;
 }

@@ -283,12 +283,13 @@ TEST(BisectionTetrahedron, GrowthRateAgainstEq5) {
   // (1) MtMetrics::growth_rate: the sequence that applies every modification, so (faces of the Mt) / (faces
   // of the finest mesh). Level j of the semi-regular structure creates the whole mesh K_j = 2^j |K0| faces,
   // so it is 2 - 2^-m: below 2, the image / pre-image ratio of a split, as the sentence above eq. 5 says.
-  // (2) chain_growth: a sequence is a chain (each modification consumes a face of the previous one), its
-  // size the faces of K0 and of its images, its cumulative application the mesh that applying it yields
-  // (with every ancestor it needs). Past the first level every split has two distinct parents, so a chain
-  // of k splits yields at least 2k - 1 of them, and the growth is largest for one split: (|K0| + 4) /
-  // (|K0| + 2) = (n + 2) / (n + 1) with n = |K0| / 2 = 2 two-face clusters: eq. 5, met with equality.
-  // (With n = |K0| = 4, eq. 5's 1.2 would be exceeded by that single split.)
+  // (2) chain_growth, a constructed reading (mt_metrics.hpp): a sequence is a chain (each modification
+  // consumes a face of the previous one), its size the faces of K0 and of its images, its cumulative
+  // application the mesh that applying it with every ancestor yields. The structure is layered and past the
+  // first level every split has two distinct parents, so a chain of k splits yields at least 2k - 1 of them,
+  // and the growth is largest for one split: (|K0| + 4) / (|K0| + 2), eq. 5's (n + 2) / (n + 1) only with n
+  // reinterpreted as |K0| / 2 = 2 clusters. With the paper's n = |K0| = 4, eq. 5's 1.2 is exceeded by that
+  // single split.
   const TriMesh tet = tetrahedron();
   const double n = 2.0;
   for (int m = 1; m <= 8; ++m) {

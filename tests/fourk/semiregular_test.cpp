@@ -784,12 +784,12 @@ TEST(SemiRegular, ExpressivePowerAgainstEq4) {
   }
 }
 
-// Eq. 5 of Velho-Gomes 7.2 in the chain reading of mt_metrics.hpp (see bisection_test.cpp for the
-// tetrahedron): on closed surfaces every split past the first level has two distinct parents, and the
-// largest growth is that of one split, (n + 2) / (n + 1) with n = |K0| / 2 two-face clusters. On a surface
-// with a border the bound needs that assumption: a border split (1 -> 2) has one parent, and a chain through
-// border splits exceeds it (by little: it stays below 2, the image / pre-image ratio).
-TEST(SemiRegular, ChainGrowthMeetsEq5OnClosedSurfaces) {
+// The chain growth of mt_metrics.hpp (a constructed reading of Velho-Gomes 3.3, see bisection_test.cpp for
+// the tetrahedron): on closed surfaces the structure is layered and every split past the first level has
+// two distinct parents, so the largest growth is that of one split, (|K0| + 4) / (|K0| + 2) = (n + 2) /
+// (n + 1) with n = |K0| / 2. On a surface with a border that assumption fails: a border split (1 -> 2) has
+// one parent, and a chain through border splits exceeds it (by little: it stays below 2).
+TEST(SemiRegular, ChainGrowthOfClosedSurfacesIsOneSplits) {
   struct Closed {
     std::string name;
     TriMesh mesh;
