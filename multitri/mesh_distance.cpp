@@ -39,8 +39,12 @@ double box_sq(const glm::vec3& lo, const glm::vec3& hi, const glm::dvec3& p) noe
 
 double point_triangle_distance_sq(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
                                   const glm::dvec3& c) noexcept {
-  const glm::dvec3 n = glm::cross(b - a, c - a);
-  if (!(glm::dot(n, n) > 0.0))
+  // Degenerate and nearly degenerate triangles (sin of the angle at a below 1e-5): the region tests of the
+  // closest-point method lose their signs to rounding there and can return a far point, while the edges
+  // are within the sliver's width (< 1e-5 of its edges) of every point of it.
+  const glm::dvec3 ab = b - a, ac = c - a;
+  const glm::dvec3 n = glm::cross(ab, ac);
+  if (!(glm::dot(n, n) > 1e-10 * glm::dot(ab, ab) * glm::dot(ac, ac)))
     return std::min({point_segment_sq(p, a, b), point_segment_sq(p, b, c), point_segment_sq(p, c, a)});
   const glm::dvec3 d = p - closest_point_on_triangle(p, a, b, c);
   return glm::dot(d, d);
@@ -48,10 +52,15 @@ double point_triangle_distance_sq(const glm::dvec3& p, const glm::dvec3& a, cons
 
 TriangleBvh::TriangleBvh(std::span<const glm::vec3> positions, std::span<const Index> indices) {
   const std::size_t nt = indices.size() / 3;
-  for (std::size_t i = 0; i < 3 * nt; ++i)
+  for (std::size_t i = 0; i < 3 * nt; ++i) {
     if (indices[i] >= positions.size())
       throw InvalidInput("TriangleBvh: face " + std::to_string(i / 3) + " uses vertex " + std::to_string(indices[i]) +
                          " of " + std::to_string(positions.size()));
+    const glm::vec3& q = positions[indices[i]];
+    if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+      throw InvalidInput("TriangleBvh: vertex " + std::to_string(indices[i]) + " of face " + std::to_string(i / 3) +
+                         " is not finite");
+  }
   std::vector<Index> order(nt);
   std::iota(order.begin(), order.end(), Index{0});
   std::vector<glm::vec3> centroid(nt);
@@ -139,7 +148,10 @@ SurfaceDistance vertex_to_surface_distance(const TriMesh& from, const TriMesh& t
   double sum = 0.0, max_sq = 0.0;
   for (std::size_t v = 0; v < used.size(); ++v) {
     if (!used[v]) continue;
-    box.add(from.positions[v]);
+    const glm::vec3& q = from.positions[v];
+    if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+      throw InvalidInput("vertex_to_surface_distance: vertex " + std::to_string(v) + " is not finite");
+    box.add(q);
     const double d2 = bvh.nearest_sq(glm::dvec3(from.positions[v]));
     sum += d2;
     max_sq = std::max(max_sq, d2);

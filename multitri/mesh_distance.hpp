@@ -17,18 +17,20 @@
 
 namespace varmesh {
 
-/// Squared distance from p to the closed triangle abc; a degenerate triangle (collinear or repeated
-/// corners) is measured as the union of its edges.
+/// Squared distance from p to the closed triangle abc. A degenerate or nearly degenerate triangle (the sine
+/// of its angle at a below 1e-5: collinear or repeated corners, slivers) is measured as the union of its
+/// edges, which lie within its width of every point of it (the closest-point regions are unreliable there).
+/// Non-finite input gives an unspecified result.
 double point_triangle_distance_sq(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
                                   const glm::dvec3& c) noexcept;
 
 class TriangleBvh {
  public:
   /// The triangles (indices[3t], indices[3t+1], indices[3t+2]) of `positions`. Throws InvalidInput when an
-  /// index is out of range.
+  /// index is out of range or a corner is not finite.
   TriangleBvh(std::span<const glm::vec3> positions, std::span<const Index> indices);
   explicit TriangleBvh(const TriMesh& mesh) : TriangleBvh(mesh.positions, mesh.indices) {}
-  /// Squared distance from p to the nearest triangle; +infinity when there is none.
+  /// Squared distance from p to the nearest triangle; +infinity when there is none. p must be finite.
   double nearest_sq(const glm::dvec3& p) const noexcept;
   std::size_t num_triangles() const noexcept { return tri_.size() / 3; }
 
@@ -52,7 +54,8 @@ struct SurfaceDistance {
 };
 
 /// Every vertex that a face of `from` uses, measured to the nearest triangle of `to`. A `to` without faces
-/// gives infinite distances. O(V log F).
+/// gives infinite distances. Throws InvalidInput naming the vertex when an index is out of range or a
+/// measured vertex or a corner of `to` is not finite. O(V log F).
 SurfaceDistance vertex_to_surface_distance(const TriMesh& from, const TriMesh& to);
 
 }  // namespace varmesh

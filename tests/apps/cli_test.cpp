@@ -145,7 +145,8 @@ TEST(Cli, BuildThenQueryAdaptiveTorus) {
   // Finer where the ramp asks for small triangles (x < 0) than where it allows large ones.
   std::size_t left = 0, right = 0;
   for (std::size_t f = 0; f < ramp.num_faces(); ++f) (ramp.positions[ramp.indices[3 * f]].x < 0 ? left : right)++;
-  EXPECT_GT(left, right);  // --measure: the distance from the finest mesh's vertices, as the library measures it (0 for the finest).
+  EXPECT_GT(left, right);
+  // --measure: the distance from the finest mesh's vertices, as the library measures it (0 for the finest).
   r = run("query " + (dir / "t.vrm").string() + " --ramp -3,0,0,3,0,0,0.2,3 --measure -o " + (dir / "ramp.obj").string(), dir);
   ASSERT_EQ(r.status, 0) << r.err;
   const SurfaceDistance want = vertex_to_surface_distance(fine, read_mesh((dir / "ramp.obj").string()));
