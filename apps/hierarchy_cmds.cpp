@@ -76,7 +76,8 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
                  "quadric's minimiser) or lindstrom-turk");
   sub.add_option("--lt-finish", a.lt_finish,
                  "quadric costs with --faces or --vertices: from this many times the target on, order and place the "
-                 "collapses by Lindstrom-Turk costs (default 4; 0: quadrics to the end)");
+                 "collapses by Lindstrom-Turk costs (default 4; 0: quadrics to the end, better for models with thin parts "
+                 "taken down to tens of faces: the cow at 58 faces has half the error)");
   sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(CLI::NonNegativeNumber);
   sub.add_option("--vertices", a.vertices, "stop at this many vertices")->check(CLI::NonNegativeNumber);
   sub.add_option("--max-error", a.max_error, "stop before a collapse whose error exceeds this (object units)")
