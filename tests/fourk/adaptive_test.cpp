@@ -57,7 +57,7 @@ glm::dvec2 domain_point(const AdaptiveHierarchy& h, FaceId f, const glm::dvec3& 
   return b[0] * glm::dvec2(h.domain[v[0]]) + b[1] * glm::dvec2(h.domain[v[1]]) + b[2] * glm::dvec2(h.domain[v[2]]);
 }
 
-std::uint64_t dkey(Index a, Index b) { return (std::uint64_t(a) << 32) | b; }
+constexpr auto dkey = directed_edge_key;
 
 // Conforming by vertex ids: every directed edge used once (so an edge has at most two faces, with opposite
 // orientations). Returns the border edges (directed edges whose reverse is absent) through `border`.

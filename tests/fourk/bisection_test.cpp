@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include "mesh_fixtures.hpp"
 #include "mt_oracles.hpp"
 #include <glm/geometric.hpp>
 
@@ -25,46 +26,10 @@
 namespace varmesh {
 namespace {
 
-std::uint64_t dkey(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
+constexpr auto dkey = directed_edge_key;
 
-// Convex hull of a few points in convex position, faces outward (brute force over triples).
-TriMesh hull_mesh(const std::vector<glm::vec3>& points) {
-  TriMesh m;
-  m.positions = points;
-  const std::size_t n = points.size();
-  for (Index i = 0; i < n; ++i)
-    for (Index j = i + 1; j < n; ++j)
-      for (Index k = j + 1; k < n; ++k) {
-        const glm::vec3 nrm = glm::cross(points[j] - points[i], points[k] - points[i]);
-        int pos = 0, neg = 0;
-        for (Index l = 0; l < n; ++l) {
-          if (l == i || l == j || l == k) continue;
-          const float s = glm::dot(nrm, points[l] - points[i]);
-          if (s > 1e-4f) ++pos;
-          if (s < -1e-4f) ++neg;
-        }
-        if (pos != 0 && neg != 0) continue;
-        if (pos == 0) m.indices.insert(m.indices.end(), {i, j, k});  // others behind: (i, j, k) faces out
-        else m.indices.insert(m.indices.end(), {i, k, j});
-      }
-  return m;
-}
-
-TriMesh tetrahedron() {
-  return hull_mesh({{1.0f, 1.0f, 1.0f}, {1.0f, -1.0f, -1.0f}, {-1.0f, 1.0f, -1.0f}, {-1.0f, -1.0f, 1.0f}});
-}
-
-TriMesh icosahedron() {
-  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
-  std::vector<glm::vec3> p;
-  for (float a : {-1.0f, 1.0f})
-    for (float b : {-t, t}) {
-      p.push_back({0.0f, a, b});
-      p.push_back({a, b, 0.0f});
-      p.push_back({b, 0.0f, a});
-    }
-  return hull_mesh(p);
-}
+TriMesh tetrahedron() { return testing::tetrahedron_mesh(); }
+TriMesh icosahedron() { return testing::icosahedron_mesh(); }
 
 // The faces paired across the two opposite edges {0,1} and {2,3}: the semi-regular 4-8 structure of
 // Velho-Gomes 7.2 whose level j has 2^j nodes.

@@ -66,42 +66,8 @@ TriMesh disc(int k, int rings) {
   return m;
 }
 
-// Convex hull of points in convex position by brute force over triples (small meshes only).
-TriMesh hull(const std::vector<glm::vec3>& p) {
-  TriMesh m;
-  m.positions = p;
-  const auto n = static_cast<Index>(p.size());
-  for (Index i = 0; i < n; ++i)
-    for (Index j = i + 1; j < n; ++j)
-      for (Index k = j + 1; k < n; ++k) {
-        const glm::vec3 nrm = glm::cross(p[j] - p[i], p[k] - p[i]);
-        int above = 0, below = 0;
-        for (Index l = 0; l < n; ++l) {
-          if (l == i || l == j || l == k) continue;
-          const float s = glm::dot(nrm, p[l] - p[i]);
-          above += s > 1e-4f;
-          below += s < -1e-4f;
-        }
-        if (above && below) continue;
-        if (above) m.indices.insert(m.indices.end(), {i, k, j});
-        else m.indices.insert(m.indices.end(), {i, j, k});
-      }
-  return m;
-}
-
-TriMesh icosahedron() {
-  const float t = 1.6180340f;
-  std::vector<glm::vec3> p;
-  for (float a : {-1.0f, 1.0f})
-    for (float b : {-t, t}) {
-      p.push_back({0.0f, a, b});
-      p.push_back({a, b, 0.0f});
-      p.push_back({b, 0.0f, a});
-    }
-  return hull(p);
-}
-
-TriMesh tetrahedron() { return hull({{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}}); }
+TriMesh tetrahedron() { return testing::tetrahedron_mesh(); }
+TriMesh icosahedron() { return testing::icosahedron_mesh(); }
 
 TriMesh square() {
   TriMesh m;
@@ -126,7 +92,7 @@ TriMesh append(TriMesh a, const TriMesh& b, const glm::vec3& shift) {
 
 // --- mesh checks ---------------------------------------------------------------------------------------
 
-std::uint64_t dkey(Index a, Index b) { return (std::uint64_t(a) << 32) | b; }
+constexpr auto dkey = directed_edge_key;
 
 // Directed edges of a mesh, sorted (sorted vectors rather than sets: these checks run on ~10^5 faces in
 // the sanitizer build too).

@@ -36,7 +36,7 @@ namespace {
 using testing::point_triangle;
 using Key = std::array<VertexId, 3>;
 
-std::uint64_t dkey(VertexId a, VertexId b) { return (std::uint64_t(a) << 32) | b; }
+constexpr auto dkey = directed_edge_key;
 
 // Oriented face as a rotation-normalised triple (smallest corner first).
 Key oriented(VertexId a, VertexId b, VertexId c) {
