@@ -243,6 +243,7 @@ Step::~Step() {
 namespace {
 
 int cmd_info(const std::string& path) {
+  if (print_hierarchy_info(path)) return 0;
   ReadInfo info;
   const TriMesh mesh = read_mesh(path, &info);
   const MeshReport report = analyze_mesh(mesh);
@@ -402,8 +403,8 @@ int run(int argc, char** argv) {
   app.set_version_flag("--version", "varmesh 0.1.0");
 
   std::string info_path;
-  auto* info = app.add_subcommand("info", "Print the topology report of a mesh (OBJ, OFF, PLY)");
-  info->add_option("FILE", info_path, "mesh file")->required();
+  auto* info = app.add_subcommand("info", "Print the topology report of a mesh (OBJ, OFF, PLY), or a summary of a hierarchy file (.vmh, .vrm)");
+  info->add_option("FILE", info_path, "mesh or hierarchy file")->required();
 
   TerrainArgs ta;
   auto* terrain = app.add_subcommand("terrain", "Build the 4-8 hierarchy of a height field and extract an adapted mesh");

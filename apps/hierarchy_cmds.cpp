@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -133,6 +134,61 @@ void print_metrics(const Mt& mt, bool semiregular = false) {
     std::printf("chain growth %.6f (a chain of %zu, closure %zu); (n+2)/(n+1) with n = |K0|/2 = %g: %.6f\n", g.max_growth,
                 g.argmax_length, g.argmax_closure, n, (n + 2.0) / (n + 1.0));
   }
+}
+
+// `varmesh info` on a hierarchy file, told by its magic (not its extension).
+bool hierarchy_info(const std::string& path) {
+  // The magic decides; a file too short for one (or unreadable) is a hierarchy file when its extension
+  // says so, and then the loader names the problem (truncated, cannot open).
+  char magic[8] = {};
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in || !in.read(magic, sizeof magic)) std::fill(std::begin(magic), std::end(magic), '\0');
+  }
+  std::string m(magic, sizeof magic);
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (m != "VMPMHIER" && m != std::string("VMSHMT\r\n", 8)) {
+    if (m != std::string(8, '\0')) return false;
+    if (ext == ".vmh") m = "VMPMHIER";
+    else if (ext != ".vrm") return false;
+  }
+  std::error_code ec;
+  const auto file_bytes = std::filesystem::file_size(path, ec);
+  Stopwatch watch;
+  if (m == "VMPMHIER") {
+    const VertexHierarchy h = read_vertex_hierarchy(path);
+    const double ms = watch.ms();
+    const InputRepairReport& r = h.repair_report();
+    std::printf("%s: progressive-mesh vertex hierarchy (.vmh, format %u, %zu bytes), loaded and validated in %.1f ms\n",
+                path.c_str(), kVertexHierarchyFormatVersion, static_cast<std::size_t>(file_bytes), ms);
+    std::printf("input %zu vertices, %zu faces; repaired: %zu unreferenced vertices, %zu degenerate and %zu duplicate "
+                "faces dropped, %zu vertex copies added (%zu non-manifold edge faces, %zu non-manifold vertices), %zu "
+                "locked\n",
+                r.input_vertices, r.input_faces, r.unreferenced_vertices, r.degenerate_faces, r.duplicate_faces,
+                r.added_vertex_copies, r.nonmanifold_edge_faces, r.nonmanifold_vertices, r.locked_vertices);
+    std::printf("%zu leaves, %zu faces, %zu collapses (%zu nodes) down to a base mesh of %zu vertices, %zu faces; %zu "
+                "trees, depth %d; colours %s; %.1f bytes per original face in memory\n",
+                h.num_leaves(), h.num_faces(), h.num_collapses(), h.num_nodes(), h.num_roots(), h.base_faces().size(),
+                h.num_roots(), h.max_depth(), h.has_colors() ? "yes" : "no",
+                double(h.memory_bytes()) / double(std::max<std::size_t>(1, h.num_faces())));
+    Box3 box;
+    for (std::size_t v = 0; v < h.num_leaves(); ++v) box.add(h.position(static_cast<Index>(v)));
+    const double diag = glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo));
+    float worst = 0.0f;
+    for (Index root : h.roots()) worst = std::max(worst, h.bound(root).error);
+    std::printf("error bound of the base mesh (largest root): %.6g (%.2f e-4 of the bounding-box diagonal %.6g)\n",
+                double(worst), diag > 0.0 ? 1e4 * double(worst) / diag : 0.0, diag);
+    return true;
+  }
+  const Mt mt = read_mt(path);
+  const double ms = watch.ms();
+  std::printf("%s: Multi-Triangulation (.vrm, %zu bytes), loaded and checked in %.1f ms\n", path.c_str(),
+              static_cast<std::size_t>(file_bytes), ms);
+  std::size_t kinds[4] = {0, 0, 0, 0};
+  for (NodeId n = 1; n < mt.num_nodes(); ++n) ++kinds[static_cast<int>(mt.kind(n)) & 3];
+  std::printf("nodes: %zu split, %zu swap, %zu generic\n", kinds[1], kinds[2], kinds[3]);
+  print_metrics(mt);
+  return true;
 }
 
 // The pictures' camera: the default 3/4 view, or picture_camera_for when --up or --view is given.
@@ -435,5 +491,7 @@ int run_pm_query(const PmQueryArgs& a) {
   if (a.measure) print_distance("result", vertex_to_surface_distance(input_mesh_of(h), mesh), "input");
   return 0;
 }
+
+bool print_hierarchy_info(const std::string& path) { return hierarchy_info(path); }
 
 }  // namespace varmesh::app

@@ -58,6 +58,10 @@ void add_query_options(CLI::App& sub, QueryArgs& args);
 void add_pm_build_options(CLI::App& sub, PmBuildArgs& args);
 void add_pm_query_options(CLI::App& sub, PmQueryArgs& args);
 int run_build(const BuildArgs& args);
+/// `varmesh info` on a .vmh or .vrm file (told by its magic): loads it (with the loader's checks) and prints
+/// a summary. Returns false, printing nothing, when the file is not a hierarchy file (or cannot be opened):
+/// the caller then reads it as a mesh. Throws IoError for a hierarchy file the loader rejects.
+bool print_hierarchy_info(const std::string& path);
 int run_pm_build(const PmBuildArgs& args);
 int run_pm_query(const PmQueryArgs& args);
 int run_query(const QueryArgs& args);

@@ -2,7 +2,9 @@
 // refinement restores the input, budgets and the schemes' ordering hold, and bad input is named.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -11,6 +13,8 @@
 
 #include "multitri/mesh_distance.hpp"
 #include "multitri/mesh_io.hpp"
+#include "multitri/mt_io.hpp"
+#include "multitri/mt_metrics.hpp"
 #include "pm/hierarchy_io.hpp"
 #include "pm/qem_analysis.hpp"
 #include "pm/pm_fixtures.hpp"
@@ -173,6 +177,72 @@ TEST(PmCli, BadInputIsNamed) {
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_TRUE(contains(r.err, (b.dir / "cut.vmh").string())) << r.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// `varmesh info` on hierarchy files: told by their magic (whatever the extension), summarised with the counts
+// the library reads from the same file, and refused by name when the loader refuses them.
+TEST(PmCli, InfoSummarisesHierarchyFiles) {
+  const Built b = build_torus("pm_cli_info", "--faces 100");
+  const VertexHierarchy h = read_vertex_hierarchy(b.vmh.string());
+  CmdResult r = run("info " + b.vmh.string(), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "progressive-mesh vertex hierarchy (.vmh, format 1")) << r.out;
+  std::size_t leaves = 0, faces = 0, collapses = 0, nodes = 0, base_v = 0, base_f = 0;
+  const std::size_t at = r.out.find(" leaves, ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::size_t line = r.out.rfind('\n', at) + 1;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + line, "%zu leaves, %zu faces, %zu collapses (%zu nodes) down to a base mesh of %zu vertices, %zu faces",
+                        &leaves, &faces, &collapses, &nodes, &base_v, &base_f), 6)
+      << r.out;
+  EXPECT_EQ(leaves, h.num_leaves());
+  EXPECT_EQ(faces, b.input.num_faces());
+  EXPECT_EQ(collapses, h.num_collapses());
+  EXPECT_EQ(nodes, h.num_leaves() + h.num_collapses());
+  EXPECT_EQ(base_v, h.num_roots());
+  EXPECT_EQ(base_f, h.base_faces().size());
+  float worst = 0.0f;
+  for (Index root : h.roots()) worst = std::max(worst, h.bound(root).error);
+  const std::size_t eb = r.out.find("(largest root): ");
+  ASSERT_NE(eb, std::string::npos) << r.out;
+  EXPECT_NEAR(std::stod(r.out.substr(eb + 16)), worst, 1e-5 * worst + 1e-12) << r.out;
+  // The magic decides, not the extension.
+  fs::copy_file(b.vmh, b.dir / "hier.obj");
+  r = run("info " + (b.dir / "hier.obj").string(), b.dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "progressive-mesh vertex hierarchy")) << r.out;
+
+  // A .vrm from `varmesh build`: the node and face counts of the library's metrics.
+  const fs::path vrm = b.dir / "torus.vrm";
+  r = run("build " + b.mesh.string() + " -o " + vrm.string() + " --levels 2 --quiet", b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Mt mt = read_mt(vrm.string());
+  const MtMetrics m = compute_metrics(mt);
+  r = run("info " + vrm.string(), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::size_t split = 0, swap = 0, generic = 0;
+  const std::size_t kinds = r.out.find("nodes: ");
+  ASSERT_NE(kinds, std::string::npos) << r.out;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + kinds, "nodes: %zu split, %zu swap, %zu generic", &split, &swap, &generic), 3) << r.out;
+  EXPECT_EQ(split + swap + generic, mt.num_nodes() - 1);
+  EXPECT_GT(split, 0u);
+  EXPECT_TRUE(contains(r.out, "hierarchy: " + std::to_string(m.nodes) + " nodes, " + std::to_string(m.faces) + " faces (" +
+                                  std::to_string(m.coarsest_faces) + " coarsest, " + std::to_string(m.finest_faces) + " finest)"))
+      << r.out;
+
+  // Refused by name: truncated, missing, empty.
+  {
+    std::ifstream in(b.vmh, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(b.dir / "cut.vmh", std::ios::binary) << bytes.substr(0, bytes.size() - 7);
+    std::ofstream(b.dir / "empty.vrm", std::ios::binary).flush();
+  }
+  for (const fs::path& bad : {b.dir / "cut.vmh", b.dir / "missing.vrm", b.dir / "empty.vrm"}) {
+    r = run("info " + bad.string(), b.dir);
+    EXPECT_EQ(r.status, 1) << bad;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_TRUE(contains(r.err, bad.string())) << r.err;
+    EXPECT_FALSE(contains(r.err, "unknown mesh format")) << r.err;
+  }
 }
 
 // The mesh formats go by extension in any case, as read_mesh and write_mesh take them: pm build used to refuse
