@@ -2,6 +2,7 @@
 // Small helpers shared by the subcommands: parsing "x,y,z" lists, timing, progress on stderr.
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,10 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info = nullptr);
 /// both paths as they were (an existing file included). Rethrows the error, naming the user's path.
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture);
+
+/// A temporary name beside `target` for writing it before it is moved into place: same folder (the rename
+/// stays within one file system), same extension (writers pick the format by it), hidden, with the pid.
+std::filesystem::path staged_path_beside(const std::string& target);
 
 /// An output folder written all or nothing: files go to a staging folder inside it (path(), a fresh name
 /// per object) and are moved into the folder by commit(). Without commit() - an exception on the way - the

@@ -141,6 +141,11 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
   return mesh;
 }
 
+std::filesystem::path staged_path_beside(const std::string& target) {
+  const std::filesystem::path t(target);
+  return t.parent_path() / ("." + t.stem().string() + ".partial-" + std::to_string(::getpid()) + t.extension().string());
+}
+
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture) {
   if (!picture) {
@@ -153,8 +158,7 @@ void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, c
   // the user already had there).
   namespace fs = std::filesystem;
   const fs::path target(mesh_path);
-  const fs::path staged = target.parent_path() / ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) +
-                                                  target.extension().string());
+  const fs::path staged = staged_path_beside(mesh_path);
   try {
     write_mesh(staged.string(), mesh);
   } catch (const IoError& e) {

@@ -236,19 +236,18 @@ Extracted extract_and_write(Front& front, const std::vector<Criterion>& parts, c
 // The pictures of `--pictures`, rendered as the build goes and written once the hierarchy is: a failed run
 // leaves neither the hierarchy nor pictures.
 struct Picture {
-  std::string path;
+  std::string name;  ///< file name inside the pictures folder
   Image image;
   std::size_t faces;
 };
 
-void add_level_picture(std::vector<Picture>& pictures, const std::string& dir, const std::string& name, const TriMesh& mesh,
-                       const Camera& cam) {
+void add_level_picture(std::vector<Picture>& pictures, const std::string& name, const TriMesh& mesh, const Camera& cam) {
   RenderOptions o;
   o.width = 640;
   o.height = 480;
   o.wireframe = mesh.num_faces() < 30000;
   o.smooth = false;
-  pictures.push_back({(std::filesystem::path(dir) / name).string(), render_mesh(mesh, cam, o), mesh.num_faces()});
+  pictures.push_back({name, render_mesh(mesh, cam, o), mesh.num_faces()});
 }
 
 void check_picture_dir(const std::string& dir) {
@@ -257,24 +256,40 @@ void check_picture_dir(const std::string& dir) {
     throw IoError(dir, "cannot create the pictures folder: a file of that name exists");
 }
 
-// Writes the pictures after the hierarchy `output`; on failure removes what this run wrote, `output` included.
-void write_pictures(const std::string& dir, const std::vector<Picture>& pictures, const std::string& output) {
-  if (dir.empty()) return;
+// Writes the hierarchy `output` and its pictures, all or nothing: the hierarchy goes to a temporary name
+// beside its target, the pictures to a staging folder inside `dir` (StagedFolder), then the pictures are
+// moved into place and the hierarchy renamed last. A failure on the way leaves `output` and the folder as
+// they were, an earlier run's files included (removing what this run wrote had deleted them).
+void write_hierarchy_and_pictures(const std::string& output, const Mt& mt, const std::string& dir,
+                                  const std::vector<Picture>& pictures) {
+  if (dir.empty()) {
+    write_mt(output, mt);
+    return;
+  }
   namespace fs = std::filesystem;
+  const fs::path target(output);
+  const fs::path staged = staged_path_beside(output);
   std::error_code ec;
-  const bool existed = fs::exists(dir, ec);
-  std::size_t written = 0;
+  if (fs::is_directory(fs::symlink_status(target, ec))) throw IoError(output, "is a folder: the hierarchy cannot be put there");
   try {
-    fs::create_directories(dir, ec);
-    if (ec) throw IoError(dir, "cannot create the pictures folder: " + ec.message());
-    for (; written < pictures.size(); ++written) write_png(pictures[written].path, pictures[written].image);
+    write_mt(staged.string(), mt);
+  } catch (const IoError& e) {
+    throw IoError(output, e.reason());  // the user's name, not the staging one
+  }
+  try {
+    StagedFolder folder(dir);
+    for (const Picture& p : pictures) write_png(folder.path(p.name), p.image);
+    folder.commit();
   } catch (...) {
-    for (std::size_t i = 0; i < written; ++i) fs::remove(pictures[i].path, ec);
-    if (!existed) fs::remove(dir, ec);
-    fs::remove(output, ec);
+    fs::remove(staged, ec);
     throw;
   }
-  for (const Picture& p : pictures) std::printf("  %s: %zu faces\n", p.path.c_str(), p.faces);
+  fs::rename(staged, target, ec);
+  if (ec) {
+    fs::remove(staged, ec);
+    throw IoError(output, "cannot move the written hierarchy into place: " + ec.message());
+  }
+  for (const Picture& p : pictures) std::printf("  %s: %zu faces\n", (fs::path(dir) / p.name).string().c_str(), p.faces);
 }
 
 }  // namespace
@@ -293,7 +308,7 @@ int run_build(const BuildArgs& a) {
       MtFront fine(h.mt);
       for (NodeId n = 1; n < h.mt.num_nodes(); ++n) fine.refine(n);
       const TriMesh mesh = fine.to_mesh();
-      add_level_picture(pictures, a.pictures, "adaptive_surface.png", mesh, default_camera_for(mesh, 4.0f / 3.0f));
+      add_level_picture(pictures, "adaptive_surface.png", mesh, default_camera_for(mesh, 4.0f / 3.0f));
       if (!h.domain.empty()) {
         const TriMesh dom = adaptive_domain_mesh(h);
         Camera top = default_camera_for(dom, 4.0f / 3.0f);
@@ -303,7 +318,7 @@ int run_build(const BuildArgs& a) {
         top.up = {0.0f, 1.0f, 0.0f};
         top.z_near = 0.1f * dom.bounds().diagonal();
         top.z_far = 10.0f * dom.bounds().diagonal();
-        add_level_picture(pictures, a.pictures, "adaptive_domain.png", dom, top);
+        add_level_picture(pictures, "adaptive_domain.png", dom, top);
       }
     }
     mt = std::move(h.mt);
@@ -323,7 +338,7 @@ int run_build(const BuildArgs& a) {
       for (int level = 0; level <= levels; ++level) {
         for (NodeId n = 1; n < mt.num_nodes(); ++n)
           if (info.node_level[n] == level) front.refine(n);
-        add_level_picture(pictures, a.pictures, "semiregular_level" + std::to_string(level) + ".png", front.to_mesh(), cam);
+        add_level_picture(pictures, "semiregular_level" + std::to_string(level) + ".png", front.to_mesh(), cam);
       }
     }
   } else if (a.method == "simplify4k") {
@@ -344,15 +359,14 @@ int run_build(const BuildArgs& a) {
       for (std::size_t target : {1200u, 700u, 400u, 300u, 200u}) levels.push_back(simplify4k_closest_level(r, target));
       levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
       for (std::size_t level : levels)
-        add_level_picture(pictures, a.pictures, "simplify4k_level" + std::to_string(level) + ".png", simplify4k_level_mesh(r, level), cam);
+        add_level_picture(pictures, "simplify4k_level" + std::to_string(level) + ".png", simplify4k_level_mesh(r, level), cam);
     }
     mt = std::move(r.mt);
   } else {
     throw InvalidInput("build: unknown --method '" + a.method + "' (semiregular, adaptive, simplify4k)");
   }
   const double ms = watch.ms();
-  write_mt(a.output, mt);
-  write_pictures(a.pictures, pictures, a.output);
+  write_hierarchy_and_pictures(a.output, mt, a.pictures, pictures);
   print_metrics(mt, a.method == "semiregular");
   std::printf("built in %.1f ms -> %s\n", ms, a.output.c_str());
   return 0;

@@ -128,6 +128,22 @@ TEST(Robustness, BuildFailureLeavesNoPictures) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(vrm));
   EXPECT_TRUE(fs::exists(pictures / "adaptive_surface.png"));
+  // A later run that fails at the pictures leaves the earlier run's hierarchy and pictures as they were (it
+  // used to delete the user's .vrm and the pictures it had overwritten), and no staged file.
+  const std::string old_vrm = testing::slurp(vrm), old_png = testing::slurp(pictures / "adaptive_surface.png");
+  fs::create_directory(pictures / "adaptive_domain.png.tmp");
+  fs::remove(pictures / "adaptive_domain.png");
+  fs::rename(pictures / "adaptive_domain.png.tmp", pictures / "adaptive_domain.png");  // a folder where a PNG goes
+  r = run("build " + field.string() + " --raw-size 17,17 --method adaptive --tolerance 0.5 --quiet --pictures " +
+              pictures.string() + " -o " + vrm, dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (pictures / "adaptive_domain.png").string())) << r.err;
+  EXPECT_EQ(testing::slurp(vrm), old_vrm);
+  EXPECT_EQ(testing::slurp(pictures / "adaptive_surface.png"), old_png);
+  for (const fs::path& d : {dir, pictures})
+    for (const auto& e : fs::directory_iterator(d))
+      EXPECT_FALSE(contains(e.path().filename().string(), "partial")) << e.path();
 }
 
 // --error nan passed every "is it given" test (NaN >= 0 and NaN < 0 are both false): query silently
