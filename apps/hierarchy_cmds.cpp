@@ -220,7 +220,11 @@ struct Extracted {
 template <class Front>
 Extracted extract_and_write(Front& front, const std::vector<Criterion>& parts, const ViewQueryArgs& a) {
   Query q;
-  q.criterion = parts.empty() ? Criterion::object_error(0.0f) : parts.size() == 1 ? parts[0] : Criterion::all_of(parts);
+  // No criterion (--budget alone): nothing is fine, so the finest mesh is the goal and the budget the only
+  // limit. object_error(0) took nodes of error 0 (exact collapses of flat regions) for fine and stopped short.
+  q.criterion = parts.empty()         ? Criterion::custom([](const ElementBound&) { return false; })
+                : parts.size() == 1 ? parts[0]
+                                    : Criterion::all_of(parts);
   q.triangle_budget = a.budget;
   Extracted r;
   Stopwatch watch;
@@ -394,14 +398,16 @@ int run_query(const QueryArgs& a) {
     const glm::vec3 p0{r[0], r[1], r[2]}, p1{r[3], r[4], r[5]};
     const float s0 = r[6], s1 = r[7];
     if (!(s0 > 0.0f) || !(s1 > 0.0f)) throw InvalidInput("--ramp: sizes must be > 0");
-    const glm::vec3 axis = p1 - p0;
-    const float len2 = glm::dot(axis, axis);
-    if (!(len2 > 0.0f)) throw InvalidInput("--ramp: the two points coincide");
+    // In double: with points far apart the float squared length and dot product overflow to infinity, and
+    // t = inf / inf (NaN) refined everything.
+    const glm::dvec3 q0(p0), axis = glm::dvec3(p1) - q0;
+    const double len2 = glm::dot(axis, axis);
+    if (!(len2 > 0.0)) throw InvalidInput("--ramp: the two points coincide");
     // Figure 22 c/d of Velho-Gomes: a node is fine when its region (bounding-sphere diameter) is no larger
     // than the size the ramp asks for at its centre.
     parts.push_back(Criterion::custom([=](const ElementBound& b) {
-      const float t = std::clamp(glm::dot(b.center - p0, axis) / len2, 0.0f, 1.0f);
-      return 2.0f * b.radius <= s0 + t * (s1 - s0);
+      const double t = std::clamp(glm::dot(glm::dvec3(b.center) - q0, axis) / len2, 0.0, 1.0);
+      return 2.0 * double(b.radius) <= double(s0) + t * double(s1 - s0);
     }));
   }
   MtFront front(mt);

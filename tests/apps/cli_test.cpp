@@ -158,6 +158,48 @@ TEST(Cli, BuildThenQueryAdaptiveTorus) {
   EXPECT_EQ(testing::measured_distance(r.out, "result").second, 0.0) << r.out;
 }
 
+// --budget alone asks for the finest mesh within the budget: it used to mean --error 0, which takes nodes of
+// error 0 (simplify4k's exact collapses of a flat grid) for fine and stopped at the coarsest exact mesh.
+TEST(Cli, BudgetAloneReachesTheFinestMesh) {
+  const auto dir = testing::scratch_dir("cli_budget_flat");
+  TriMesh grid;
+  const int n = 9;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) grid.positions.push_back({float(i), float(j), 0.0f});
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const Index a = Index(j * n + i), b = a + 1, c = a + Index(n) + 1, d = a + Index(n);
+      grid.indices.insert(grid.indices.end(), {a, b, c, a, c, d});
+    }
+  write_mesh((dir / "grid.off").string(), grid);
+  const std::string vrm = (dir / "g.vrm").string(), out = (dir / "q.obj").string();
+  CmdResult r = run("build " + (dir / "grid.off").string() + " --method simplify4k -o " + vrm + " --quiet", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run("query " + vrm + " --budget 1000 -o " + out, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_mesh(out).num_faces(), grid.num_faces()) << r.out;
+  r = run("query " + vrm + " --budget 100 -o " + out, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LE(read_mesh(out).num_faces(), 100u);
+  EXPECT_GT(read_mesh(out).num_faces(), 90u) << r.out;
+}
+
+// A --ramp between points far apart: the float squared length overflowed, t became NaN and every node was
+// refined. Halfway between +-1e20 the ramp asks for the middle size everywhere, like a constant ramp.
+TEST(Cli, RampBetweenFarPoints) {
+  const auto dir = testing::scratch_dir("cli_ramp_far");
+  CmdResult r = run("build torus --method adaptive -o " + (dir / "t.vrm").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  auto faces = [&](const std::string& ramp) {
+    const CmdResult q = run("query " + (dir / "t.vrm").string() + " --ramp " + ramp + " -o " + (dir / "r.obj").string(), dir);
+    EXPECT_EQ(q.status, 0) << q.err;
+    return read_mesh((dir / "r.obj").string()).num_faces();
+  };
+  const std::size_t far = faces("-1e20,0,0,1e20,0,0,0.5,1.5"), constant = faces("-1,0,0,1,0,0,1,1"), fine = faces("-1,0,0,1,0,0,1e-6,1e-6");
+  EXPECT_LT(far, fine);
+  EXPECT_EQ(far, constant);
+}
+
 TEST(Cli, QueryPictureCameraOptions) {
   const auto dir = testing::scratch_dir("cli_query_up");
   CmdResult r = run("build torus --method adaptive -o " + (dir / "t.vrm").string(), dir);
