@@ -46,9 +46,10 @@ void require_png(const std::string& path, const char* command, const char* optio
 std::string check_non_negative(const std::string& text);
 std::string check_positive(const std::string& text);
 
-/// `--raw-size W,H` (two positive integers) into `options`; nothing when `text` is empty. Throws
-/// InvalidInput naming the option otherwise.
-void apply_raw_size(const std::string& text, HeightFieldReadOptions& options);
+/// `--raw-size W,H` (two positive integers) of the height field `path` into `options`; nothing when `text` is
+/// empty. Throws InvalidInput naming the option when it is malformed, or given for a file that is not a raw
+/// height field (.raw, .f32, any case), where it would be ignored.
+void apply_raw_size(const std::string& text, const std::string& path, HeightFieldReadOptions& options);
 
 /// read_mesh(), and an IoError naming the file when the coordinates span more than float can measure (the
 /// bounding box's diagonal overflows, e.g. coordinates near +-3.4e38): every edge length, normal and

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <cctype>
 #include <filesystem>
 #include <string>
 
@@ -122,8 +123,11 @@ std::string check_sign(const std::string& text, bool zero_ok) {
 std::string check_non_negative(const std::string& text) { return check_sign(text, true); }
 std::string check_positive(const std::string& text) { return check_sign(text, false); }
 
-void apply_raw_size(const std::string& text, HeightFieldReadOptions& options) {
+void apply_raw_size(const std::string& text, const std::string& path, HeightFieldReadOptions& options) {
   if (text.empty()) return;
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".raw" && ext != ".f32") throw InvalidInput("--raw-size is for a .raw or .f32 height field, not '" + path + "'");
   const auto wh = parse_floats(text, "--raw-size", 2);
   if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))
     throw InvalidInput("--raw-size: expected two positive integers W,H");
@@ -283,7 +287,7 @@ int cmd_terrain(const TerrainArgs& a) {
   if (!std::isfinite(a.z_scale)) throw InvalidInput("terrain: --z-scale must be a finite number");
   if (!(a.spacing > 0.0f) || !std::isfinite(a.spacing)) throw InvalidInput("terrain: --spacing must be finite and > 0");
   ro.z_scale = a.z_scale;
-  apply_raw_size(a.raw_size, ro);
+  apply_raw_size(a.raw_size, a.input, ro);
   HeightField field = read_heightfield(a.input, ro);
   field.spacing_x = field.spacing_y = a.spacing;
   Grid48Options go;

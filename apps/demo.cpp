@@ -57,7 +57,7 @@ int run_demo(const DemoArgs& a) {
       field = make_fractal_terrain(a.size, a.size, 2026, 0.18f * float(a.size));
     } else {
       HeightFieldReadOptions ro;
-      apply_raw_size(a.raw_size, ro);
+      apply_raw_size(a.raw_size, a.heightfield, ro);
       field = read_heightfield(a.heightfield, ro);
     }
   }

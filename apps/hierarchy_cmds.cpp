@@ -1,6 +1,8 @@
 // `varmesh build` and `varmesh query` (see hierarchy_cmds.hpp).
 #include "apps/hierarchy_cmds.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -36,12 +38,18 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
   sub.add_option("INPUT", a.input, "mesh (.obj/.off/.ply), height field (.pgm/.png/.raw), or torus | saddle | implicit-torus")->required();
   sub.add_option("-o,--output", a.output, "output hierarchy (.vrm)")->required();
   sub.add_option("--method", a.method, "semiregular (default) | adaptive | simplify4k");
-  sub.add_option("--levels", a.levels, "semiregular: binary refinement levels (default 4); simplify4k: most levels (0: all)")->check(CLI::Range(-1, 64));
-  sub.add_option("--tolerance", a.tolerance, "adaptive: geometric tolerance (default 1% of the bounding-box diagonal)");
-  sub.add_option("--raw-size", a.raw_size, "W,H of a .raw float32 height field");
-  sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder");
-  sub.add_option("--up", a.up, "pictures: x,y,z up axis (default 0,0,1)");
-  sub.add_option("--view", a.view, "pictures: x,y,z direction from the model towards the eye");
+  sub.add_option("--levels", a.levels,
+                 "semiregular: binary refinement levels (default 4); simplify4k: most levels (0: all); adaptive: deepest "
+                 "bisection level, 1-48 (default 40)")
+      ->check(CLI::Range(0, 64));
+  sub.add_option("--tolerance", a.tolerance,
+                 "adaptive only: geometric tolerance, > 0 (default: 1% of the height range of a height field; torus "
+                 "0.0685, saddle 0.002, implicit-torus 0.046, the paper's figures)")
+      ->check(check_positive);
+  sub.add_option("--raw-size", a.raw_size, "adaptive on a .raw float32 height field: W,H");
+  auto* pictures = sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder");
+  sub.add_option("--up", a.up, "with --pictures: x,y,z up axis (default 0,0,1)")->needs(pictures);
+  sub.add_option("--view", a.view, "with --pictures: x,y,z direction from the model towards the eye")->needs(pictures);
   sub.add_flag("--quiet", a.quiet, "no progress on stderr");
 }
 
@@ -55,9 +63,9 @@ void add_view_query_options(CLI::App& sub, ViewQueryArgs& a, const char* hierarc
   sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(camera);
   sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(camera);
   sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
-  sub.add_option("--png", a.png, "also render the result to this PNG");
-  sub.add_option("--up", a.up, "--png: x,y,z up axis (default 0,0,1)");
-  sub.add_option("--view", a.view, "--png: x,y,z direction from the model towards the eye");
+  auto* png = sub.add_option("--png", a.png, "also render the result to this PNG");
+  sub.add_option("--up", a.up, "with --png: x,y,z up axis (default 0,0,1)")->needs(png);
+  sub.add_option("--view", a.view, "with --png: x,y,z direction from the model towards the eye")->needs(png);
 }
 
 }  // namespace
@@ -98,9 +106,30 @@ void add_pm_query_options(CLI::App& sub, PmQueryArgs& a) {
 
 namespace {
 
+// --levels asks for base faces x 2^levels finest faces; the build peaks at about 260 bytes per finest face
+// (cow: 188 MB at 743k). Refused by name when that exceeds the machine's memory, before anything is
+// allocated (the library only caps the count at 2^31 faces, ~500 GB; past the memory the allocation fails
+// with a bare bad_alloc, or the kernel kills the process).
+void check_semiregular_memory(std::size_t base_faces, int levels) {
+  if (levels < 0 || levels > 40) return;  // build_semiregular_mt names an impossible level count
+  const double finest = double(base_faces) * std::ldexp(1.0, levels);
+  const double need = 260.0 * finest;
+  const double pages = double(::sysconf(_SC_PHYS_PAGES)), page = double(::sysconf(_SC_PAGESIZE));
+  const double have = pages > 0 && page > 0 ? pages * page : 0.0;
+  if (have > 0.0 && need > have) {
+    char text[200];
+    std::snprintf(text, sizeof text, "build: --levels %d on %zu base faces makes %.3g faces and needs about %.1f GB; this machine has %.1f GB",
+                  levels, base_faces, finest, need / 1e9, have / 1e9);
+    throw InvalidInput(text);
+  }
+}
+
 AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   AdaptiveOptions o;
-  o.tolerance = a.tolerance;
+  o.tolerance = a.tolerance;  // <= 0: not given (the option itself refuses values <= 0)
+  if (a.levels >= 0) o.max_level = a.levels;  // build_adaptive_* name a level outside 1..48
+  HeightFieldReadOptions ro;
+  apply_raw_size(a.raw_size, a.input, ro);  // refuses --raw-size for anything but a .raw height field
   if (a.input == "torus" || a.input == "saddle") {
     const ParametricSurface s = a.input == "torus" ? torus_parametric() : saddle_parametric();
     if (o.tolerance <= 0.0f) o.tolerance = a.input == "torus" ? 0.0685f : 0.002f;
@@ -111,8 +140,6 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
     return build_adaptive_implicit(torus_implicit(), o);
   }
   if (is_mesh_file(a.input)) throw InvalidInput("build --method adaptive: give a height field or torus | saddle | implicit-torus, not a mesh");
-  HeightFieldReadOptions ro;
-  apply_raw_size(a.raw_size, ro);
   const HeightField field = read_heightfield(a.input, ro);
   if (o.tolerance <= 0.0f) {
     const auto [lo, hi] = std::minmax_element(field.z.begin(), field.z.end());
@@ -301,6 +328,10 @@ void write_hierarchy_and_pictures(const std::string& output, const Mt& mt, const
 int run_build(const BuildArgs& a) {
   if (std::filesystem::path(a.output).extension() != ".vrm") throw InvalidInput("build: -o must end in .vrm, not '" + a.output + "'");
   if (!std::isfinite(a.tolerance)) throw InvalidInput("build: --tolerance must be a finite number");
+  if (a.method != "adaptive") {
+    if (a.tolerance > 0.0f) throw InvalidInput("build: --tolerance is for --method adaptive, not " + a.method);
+    if (!a.raw_size.empty()) throw InvalidInput("build: --raw-size is for --method adaptive on a .raw height field");
+  }
   Stopwatch watch;
   Mt mt;
   std::vector<Picture> pictures;
@@ -331,7 +362,12 @@ int run_build(const BuildArgs& a) {
     const TriMesh base = read_input_mesh(a.input);
     SemiRegularInfo info;
     const int levels = a.levels < 0 ? 4 : a.levels;
-    mt = build_semiregular_mt(base, levels, {}, &info);
+    check_semiregular_memory(base.num_faces(), levels);
+    try {
+      mt = build_semiregular_mt(base, levels, {}, &info);
+    } catch (const InvalidInput& e) {
+      throw IoError(a.input, e.what());  // name the file (e.g. "face 18 uses edge (7, 2) already shared ...")
+    }
     std::printf("semiregular: %zu base faces paired into %zu blocks (%zu left over, split 1->2 on the border), %d levels\n",
                 base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, levels);
     if (!a.pictures.empty()) {
@@ -350,7 +386,13 @@ int run_build(const BuildArgs& a) {
     const TriMesh input = read_input_mesh(a.input);
     Simplify4kOptions so;
     so.max_levels = a.levels > 0 ? a.levels : 64;  // 0 or unset: as many levels as it can
-    Simplify4kResult r = simplify4k(input, so);
+    Simplify4kResult r = [&] {
+      try {
+        return simplify4k(input, so);
+      } catch (const InvalidInput& e) {
+        throw IoError(a.input, e.what());
+      }
+    }();
     std::printf("simplify4k: %zu levels, %zu split nodes, %zu swap nodes; faces per level:", r.num_levels(), r.num_split_nodes,
                 r.num_swap_nodes);
     for (const Simplify4kLevel& l : r.levels) std::printf(" %zu", l.faces);

@@ -238,5 +238,59 @@ TEST(Cli, BuildAndQueryFailCleanly) {
   EXPECT_FALSE(fs::exists(dir / "out.obj"));
 }
 
+// Options that do not apply, or values that used to mean "the default", are refused by name (helper-52's
+// review: --tolerance -1 built with the default, --levels did nothing for adaptive, --raw-size, --up and
+// --view were ignored); mesh errors name the file; --levels past the machine's memory is refused up front.
+TEST(Cli, BuildRefusesOptionsThatDoNotApply) {
+  const auto dir = testing::scratch_dir("cli_build_options");
+  TriMesh tet;
+  tet.positions = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+  tet.indices = {0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2};
+  const std::string mesh = (dir / "tet.off").string(), vrm = (dir / "o.vrm").string();
+  write_mesh(mesh, tet);
+  TriMesh bad = tet;  // a third face on the edge (0, 1): non-manifold
+  bad.positions.push_back({0, 0, 5});
+  bad.indices.insert(bad.indices.end(), {0, 1, 4});
+  const std::string bad_mesh = (dir / "nm.off").string();
+  write_mesh(bad_mesh, bad);
+  struct Case {
+    std::string args, message;
+  };
+  const std::vector<Case> cases = {
+      {"build " + mesh + " -o " + vrm + " --tolerance 5", "--tolerance is for --method adaptive"},
+      {"build " + mesh + " -o " + vrm + " --method simplify4k --tolerance 3", "--tolerance is for --method adaptive"},
+      {"build torus --method adaptive -o " + vrm + " --tolerance -1", "--tolerance: must be > 0"},
+      {"build torus --method adaptive -o " + vrm + " --tolerance 0", "--tolerance: must be > 0"},
+      {"build torus --method adaptive -o " + vrm + " --levels 3", "not met at max_level 3"},
+      {"build torus --method adaptive -o " + vrm + " --raw-size 3,3", "--raw-size is for a .raw or .f32 height field"},
+      {"build " + mesh + " -o " + vrm + " --raw-size 3,3", "--raw-size is for --method adaptive"},
+      {"build " + mesh + " -o " + vrm + " --up 0,1,0", "--up requires --pictures"},
+      {"build " + mesh + " -o " + vrm + " --view 0,1,0", "--view requires --pictures"},
+      {"build " + mesh + " -o " + vrm + " --levels -1", "--levels"},
+      {"build " + mesh + " -o " + vrm + " --levels 40", "GB; this machine has"},
+      {"build " + bad_mesh + " -o " + vrm, bad_mesh + ": FourKMesh: face 4"},
+      {"build " + bad_mesh + " --method simplify4k -o " + vrm, bad_mesh + ": simplify4k: face"},
+      {"terrain " + mesh + " --raw-size 3,3 --error 1 -o " + (dir / "t.obj").string(), "--raw-size is for a .raw or .f32"},
+  };
+  for (const Case& c : cases) {
+    const CmdResult r = run(c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(vrm)) << c.args;
+  }
+  // --levels reaches the adaptive builder: a deeper limit meets the tolerance, with the same result as the default.
+  CmdResult r = run("build torus --method adaptive -o " + vrm + " --levels 12 --quiet", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run("query " + vrm + " --error 0 -o " + (dir / "q.obj").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_mesh((dir / "q.obj").string()).num_faces(), 528u);
+  // --up without --png in a query.
+  r = run("query " + vrm + " --error 0 -o " + (dir / "q2.obj").string() + " --up 0,1,0", dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("--up requires --png"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "q2.obj"));
+}
+
 }  // namespace
 }  // namespace varmesh
