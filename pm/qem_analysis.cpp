@@ -236,9 +236,11 @@ class Analysis {
     Index fl = kInvalid, fr = kInvalid, vl = kInvalid, vr = kInvalid;
     int kl = -1, kr = -1;  // apex corners of fl, fr
     std::array<Index, 4> fn{kInvalid, kInvalid, kInvalid, kInvalid};
-    double local = 0.0;  // largest distance from vs to the current planes of the faces around a and b
+    double local = 0.0;  // largest distance from vs to the current planes of the faces around a and b, and
+                         // between the border polylines through a, b and through vs (border_deviation)
   };
   Verdict check(Index a, Index b, const glm::dvec3& p, Step& st);
+  double border_deviation(Index a, Index b, const glm::dvec3& p) const;
   void collapse(Index a, Index b, const Placement& pl, const Step& st);
   void init_faces();
   void init_quadrics();
@@ -566,7 +568,59 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
   }
   if (apexes[0] && apexes[1]) return Verdict::kLink;
   if (flipped) return Verdict::kFlip;
+  if (border_[a] || border_[b]) st.local = std::max(st.local, border_deviation(a, b, p));
   return Verdict::kOk;
+}
+
+// The planes of the faces do not see a border vertex slide within them: a flat disk went down to one
+// triangle with every node error 0. Here the border polyline through a and b is compared with the one
+// through vs: the largest distance from a border end (a or b) to the new border segments, and from vs to
+// the old ones. A border neighbour w of v is a corner next to v in exactly one face of v.
+double Analysis::border_deviation(Index a, Index b, const glm::dvec3& p) const {
+  std::array<Index, 8> old_to;  // border edges (from[i], old_to[i]) at a or b
+  std::array<Index, 8> from;
+  std::array<Index, 8> new_to;  // border neighbours of vs
+  std::size_t n_old = 0, n_new = 0;
+  for (Index v : {a, b}) {
+    if (!border_[v]) continue;
+    for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+      const Index* c = &cur_[3 * *it];
+      const int k = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+      const Index next = c[(k + 1) % 3], prev = c[(k + 2) % 3];
+      // v -> next is a border edge when no face of v holds next -> v (next before v), and prev -> v when none
+      // holds v -> prev.
+      bool next_twin = false, prev_twin = false;
+      for (const Index* jt = faces_begin(v); jt != faces_end(v); ++jt) {
+        const Index* d = &cur_[3 * *jt];
+        const int j = d[0] == v ? 0 : (d[1] == v ? 1 : 2);
+        next_twin |= d[(j + 2) % 3] == next;
+        prev_twin |= d[(j + 1) % 3] == prev;
+      }
+      for (const auto& [w, twin] : {std::pair{next, next_twin}, std::pair{prev, prev_twin}}) {
+        if (twin || n_old == old_to.size()) continue;
+        from[n_old] = v;
+        old_to[n_old++] = w;
+        if (w != a && w != b && n_new < new_to.size()) new_to[n_new++] = w;
+      }
+    }
+  }
+  auto segment_distance = [](const glm::dvec3& q, const glm::dvec3& s0, const glm::dvec3& s1) {
+    const glm::dvec3 d = s1 - s0;
+    const double dd = glm::dot(d, d);
+    const double t = dd > 0.0 ? std::clamp(glm::dot(q - s0, d) / dd, 0.0, 1.0) : 0.0;
+    return glm::length(q - (s0 + t * d));
+  };
+  double worst = 0.0;
+  if (n_new > 0)
+    for (Index v : {a, b}) {
+      if (!border_[v]) continue;
+      double nearest = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < n_new; ++i) nearest = std::min(nearest, segment_distance(geo_[v].p, p, geo_[new_to[i]].p));
+      worst = std::max(worst, nearest);
+    }
+  double nearest = n_old > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+  for (std::size_t i = 0; i < n_old; ++i) nearest = std::min(nearest, segment_distance(p, geo_[from[i]].p, geo_[old_to[i]].p));
+  return std::max(worst, nearest);
 }
 
 void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {

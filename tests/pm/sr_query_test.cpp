@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "multitri/camera.hpp"
+#include "multitri/mesh_distance.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
 #include "pm/dual_pieces.hpp"
@@ -71,6 +72,38 @@ TEST(SrQuery, ObjectErrorExtractReachesFixpointAndRefinesWhereNeeded) {
     q.criterion = Criterion::object_error(0.0f);
     extract(sr, q);
     EXPECT_EQ(sr.num_faces(), h.num_faces()) << scheme_name(s);
+  }
+}
+
+// The node error bounds how far the surface moved also where it moves within its own plane: along a border.
+// A flat disk used to go down to one triangle with every node error 0 (the planes of the faces do not see a
+// border vertex slide), so object_error(0) returned that triangle, 0.55 away from the input's vertices.
+TEST(SrQuery, ObjectErrorBoundsTheDistanceOnAFlatDisk) {
+  TriMesh disk;
+  const int rings = 8, around = 16;
+  disk.positions.push_back({0.0f, 0.0f, 0.0f});
+  for (int r = 1; r <= rings; ++r)
+    for (int k = 0; k < around; ++k) {
+      const float t = 6.2831853f * (float(k) + 0.5f * float(r % 2)) / float(around), rad = float(r) / float(rings);
+      disk.positions.push_back({rad * std::cos(t), rad * std::sin(t), 0.0f});
+    }
+  auto id = [&](int r, int k) { return r == 0 ? Index{0} : static_cast<Index>(1 + (r - 1) * around + (k + around) % around); };
+  for (int k = 0; k < around; ++k) disk.indices.insert(disk.indices.end(), {0, id(1, k), id(1, k + 1)});
+  for (int r = 1; r < rings; ++r)
+    for (int k = 0; k < around; ++k) {
+      const Index a = id(r, k), b = id(r + 1, k), c = id(r + 1, k + 1), d = id(r, k + 1);
+      if (r % 2) disk.indices.insert(disk.indices.end(), {a, b, c, a, c, d});
+      else disk.indices.insert(disk.indices.end(), {a, b, d, b, c, d});
+    }
+  const VertexHierarchy h = build_vertex_hierarchy(disk);
+  ASSERT_LT(h.base_faces().size(), disk.num_faces() / 4);
+  for (float e : {0.0f, 0.01f, 0.05f, 0.2f}) {
+    SrMesh sr(h, RefinementScheme::kKimLee);
+    Query q;
+    q.criterion = Criterion::object_error(e);
+    extract(sr, q);
+    const SurfaceDistance d = vertex_to_surface_distance(disk, sr.to_mesh());
+    EXPECT_LE(d.max, double(e) + 1e-6) << "error " << e << ": " << sr.num_faces() << " faces";
   }
 }
 
