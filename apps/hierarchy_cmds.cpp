@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -243,9 +245,12 @@ struct Extracted {
   QueryStats stats;
   TriMesh mesh;
   double ms = 0.0;
+  std::optional<SurfaceDistance> distance;  ///< --measure, taken before anything is written
 };
+// `measure_from`: with --measure, the mesh whose vertices are measured against the result (built only then).
 template <class Front>
-Extracted extract_and_write(Front& front, const std::vector<Criterion>& parts, const ViewQueryArgs& a) {
+Extracted extract_and_write(Front& front, const std::vector<Criterion>& parts, const ViewQueryArgs& a,
+                            const std::function<TriMesh()>& measure_from) {
   Query q;
   // No criterion (--budget alone): nothing is fine, so the finest mesh is the goal and the budget the only
   // limit. object_error(0) took nodes of error 0 (exact collapses of flat regions) for fine and stopped short.
@@ -258,8 +263,10 @@ Extracted extract_and_write(Front& front, const std::vector<Criterion>& parts, c
   r.stats = extract(front, q);
   r.ms = watch.ms();
   r.mesh = front.to_mesh();
-  // The picture is rendered before anything is written, so a bad --png, --up or --view leaves no file.
+  // The picture is rendered and the distance measured before anything is written, so a bad --png, --up or
+  // --view, or a measurement that fails, leaves no file.
   const Image picture = query_picture(r.mesh, a);
+  if (a.measure) r.distance = vertex_to_surface_distance(measure_from(), r.mesh);
   write_mesh_and_picture(a.output, r.mesh, a.png, a.png.empty() ? nullptr : &picture);
   return r;
 }
@@ -453,15 +460,15 @@ int run_query(const QueryArgs& a) {
     }));
   }
   MtFront front(mt);
-  const auto [st, mesh, ms] = extract_and_write(front, parts, a);
-  std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
-              st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
-  if (a.measure) {
+  const auto [st, mesh, ms, distance] = extract_and_write(front, parts, a, [&] {
     MtFront finest(mt);  // every node applied: nodes are numbered parents first
     for (NodeId n = 0; n < mt.num_nodes(); ++n)
       if (!finest.is_applied(n)) finest.apply(n);
-    print_distance("result", vertex_to_surface_distance(finest.to_mesh(), mesh), "finest mesh");
-  }
+    return finest.to_mesh();
+  });
+  std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
+              st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  if (distance) print_distance("result", *distance, "finest mesh");
   return 0;
 }
 
@@ -473,13 +480,16 @@ TriMesh input_mesh_of(const VertexHierarchy& h) {
   TriMesh leaves = mesh_after_collapses(h, 0);
   const std::span<const Index> to_input = h.leaf_to_input();
   if (to_input.size() != h.num_leaves()) return leaves;
+  // Numbered densely in the order of the input's ids (not by the ids themselves: their range is the file's word).
+  std::vector<Index> ids(to_input.begin(), to_input.end());
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  auto dense = [&](Index id) { return static_cast<Index>(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()); };
   TriMesh m;
-  for (Index l = 0; l < to_input.size(); ++l) {
-    if (to_input[l] >= m.positions.size()) m.positions.resize(std::size_t{to_input[l]} + 1, glm::vec3(0.0f));
-    m.positions[to_input[l]] = leaves.positions[l];
-  }
+  m.positions.resize(ids.size());
+  for (Index l = 0; l < to_input.size(); ++l) m.positions[dense(to_input[l])] = leaves.positions[l];
   m.indices.reserve(leaves.indices.size());
-  for (Index c : leaves.indices) m.indices.push_back(to_input[c]);
+  for (Index c : leaves.indices) m.indices.push_back(dense(to_input[c]));
   return m;
 }
 }  // namespace
@@ -516,6 +526,9 @@ int run_pm_build(const PmBuildArgs& a) {
     throw IoError(a.input, e.what());  // name the file (e.g. "mesh has no non-degenerate face")
   }
   if (!a.quiet && st.collapses >= 4096) std::fprintf(stderr, "\n");
+  // Measured before the file is written: a measurement that fails leaves no file.
+  std::optional<SurfaceDistance> distance;
+  if (a.measure) distance = vertex_to_surface_distance(mesh, mesh_after_collapses(h, h.num_collapses()));
   write_vertex_hierarchy(a.output, h);
   const InputRepairReport& r = h.repair_report();
   std::printf("input %zu vertices, %zu faces; repaired: %zu unreferenced vertices, %zu degenerate and %zu duplicate "
@@ -529,7 +542,7 @@ int run_pm_build(const PmBuildArgs& a) {
   if (st.lt_finished && st.collapses > st.lt_finish_from)
     std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,
                 st.collapses, a.lt_finish);
-  if (a.measure) print_distance("base mesh", vertex_to_surface_distance(mesh, mesh_after_collapses(h, h.num_collapses())), "input");
+  if (distance) print_distance("base mesh", *distance, "input");
   return 0;
 }
 
@@ -545,12 +558,12 @@ int run_pm_query(const PmQueryArgs& a) {
   add_error_and_camera_criteria(a.error, a.camera, a.pixels, a.viewport, parts);
   const VertexHierarchy h = read_vertex_hierarchy(a.input);
   SrMesh sr(h, scheme);
-  const auto [st, mesh, ms] = extract_and_write(sr, parts, a);
+  const auto [st, mesh, ms, distance] = extract_and_write(sr, parts, a, [&] { return input_mesh_of(h); });
   const SrStats& s = sr.stats();
   std::printf("%s: %zu vertices, %zu triangles (%zu vsplits, %zu forced, %zu ecols, %zu forced, #DC %zu%s) in %.2f ms -> %s\n",
               scheme_name(scheme), mesh.num_vertices(), mesh.num_faces(), s.vsplits, s.forced_vsplits, s.ecols,
               s.forced_ecols, s.degenerate_cases, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
-  if (a.measure) print_distance("result", vertex_to_surface_distance(input_mesh_of(h), mesh), "input");
+  if (distance) print_distance("result", *distance, "input");
   return 0;
 }
 

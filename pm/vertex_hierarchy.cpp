@@ -62,13 +62,44 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
     if (raw.face_to_input[f] >= raw.repair.input_faces)
       bad("face " + std::to_string(f) + ": input face " + std::to_string(raw.face_to_input[f]) + " beyond the input's " +
           std::to_string(raw.repair.input_faces));
+  // The repair report adds up (an edited file could otherwise declare an input of 2^32 vertices, which
+  // the commands size their arrays by): every input vertex is some leaf's source or unreferenced, every
+  // input face kept or dropped as degenerate or duplicate, and every leaf beyond one per source is a copy.
+  {
+    std::vector<Index> sources(raw.leaf_to_input);
+    std::sort(sources.begin(), sources.end());
+    const auto distinct = static_cast<std::size_t>(std::unique(sources.begin(), sources.end()) - sources.begin());
+    const InputRepairReport& r = raw.repair;
+    if (r.input_vertices != distinct + r.unreferenced_vertices)
+      bad("repair report: " + std::to_string(r.input_vertices) + " input vertices, but " + std::to_string(distinct) +
+          " used and " + std::to_string(r.unreferenced_vertices) + " unreferenced");
+    if (r.input_faces != nf + r.degenerate_faces + r.duplicate_faces)
+      bad("repair report: " + std::to_string(r.input_faces) + " input faces, but " + std::to_string(nf) + " kept, " +
+          std::to_string(r.degenerate_faces) + " degenerate and " + std::to_string(r.duplicate_faces) + " duplicate");
+    if (r.added_vertex_copies != nl - distinct)
+      bad("repair report: " + std::to_string(r.added_vertex_copies) + " vertex copies, but " + std::to_string(nl - distinct) +
+          " leaves share a source");
+  }
+  // Slack for the float rounding of the enclosing spheres (relative to the sphere's size and place).
+  // In double: the float squared distance overflows past ~1.8e19.
+  auto outside = [](const glm::vec3& p, const ElementBound& b) {
+    const double scale = std::max({std::abs(b.center.x), std::abs(b.center.y), std::abs(b.center.z), b.radius});
+    return glm::length(glm::dvec3(p) - glm::dvec3(b.center)) > double(b.radius) + 1e-5 * scale;
+  };
   for (std::size_t v = 0; v < nn; ++v) {
     const glm::vec3& p = raw.positions[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) bad("node " + std::to_string(v) + ": position not finite");
     const ElementBound& b = raw.bounds[v];
     if (!(b.radius >= 0.0f) || !std::isfinite(b.radius) || !(b.error >= 0.0f) || !std::isfinite(b.error))
       bad("node " + std::to_string(v) + ": bound not finite or negative");
+    if (outside(p, b)) bad("node " + std::to_string(v) + ": position outside its bounding sphere");
   }
+  // A leaf's sphere holds its faces (the view criteria test spheres, and the faces must not escape them).
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k)
+      for (int j = 1; j < 3; ++j)
+        if (outside(raw.positions[raw.faces[3 * f + (k + j) % 3]], raw.bounds[raw.faces[3 * f + k]]))
+          bad("leaf " + std::to_string(raw.faces[3 * f + k]) + ": face " + std::to_string(f) + " leaves its bounding sphere");
 
   h.parent_.assign(nn, kInvalid);
   h.face_creator_.assign(nf, kInvalid);

@@ -4,6 +4,7 @@
 #include "pm/hierarchy_io.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <atomic>
 #include <bit>
 #include <cstdio>
@@ -578,6 +579,27 @@ TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
     put_le(b, at.leaf_to_input, 0xFFFFFFFEu, 4);
     rejected(b, "beyond the input's");
   }
+  {
+    // An input of 2^32 vertices (helper-53: with a leaf mapped to 2^32 - 2, pm query --measure sized an array
+    // of 51 GB by it): the report must add up.
+    Bytes b = good;
+    put_le(b, at.repair, std::uint64_t{1} << 32, 8);
+    rejected(b, "repair report");
+  }
+  {
+    Bytes b = good;  // one input face more than kept + dropped
+    put_le(b, at.repair + 8, h.repair_report().input_faces + 1, 8);
+    rejected(b, "repair report");
+  }
+  {
+    // A leaf moved to x = 3e38 with its bounds unchanged: the view criteria would test spheres it is not in.
+    Bytes b = good;
+    const float far = 3e38f;
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &far, 4);
+    put_le(b, at.positions, bits, 4);
+    rejected(b, "node 0: position outside its bounding sphere");
+  }
 }
 
 // Edits that keep every record well-formed and every earlier check happy, but describe a topology no
@@ -716,7 +738,8 @@ TEST(HierarchyBuilder, RejectsWhatNoAnalysisBuilds) {
     VertexHierarchyBuilder::Raw raw;
     raw.num_leaves = 3;
     raw.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5f, 0, 0}};
-    raw.bounds = {bound_at({0, 0, 0}, 0, 0), bound_at({1, 0, 0}, 0, 0), bound_at({0, 1, 0}, 0, 0), bound_at({0.5f, 0, 0}, 0.5f, 0.1f)};
+    // Leaf spheres hold their face (finish() checks that too).
+    raw.bounds = {bound_at({0, 0, 0}, 1.5f, 0), bound_at({1, 0, 0}, 1.5f, 0), bound_at({0, 1, 0}, 1.5f, 0), bound_at({0.5f, 0, 0}, 1.5f, 0.1f)};
     CollapseRecord r;
     r.vt = 0, r.vu = 1, r.vl_hat = 2, r.fl_hat = 0;
     raw.records = {r};
