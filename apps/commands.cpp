@@ -72,8 +72,13 @@ void add_error_and_camera_criteria(float error, const std::string& camera, float
     throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
   if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
   if (!(pixels > 0.0f) || !(viewport > 0.0f)) throw InvalidInput("--pixels and --viewport must be > 0");
-  cam.z_near = 1e-4f * glm::length(cam.eye - cam.target);
-  cam.z_far = 1e7f;
+  // Both planes relative to the viewing distance: an absolute far plane (1e7) culled every node of a model
+  // in large units (a bunny scaled by 1e9 came back as its base mesh), and at small scales the far/near
+  // ratio lost the frustum's precision. The far plane is meant to cull nothing.
+  const float distance = glm::length(cam.eye - cam.target);
+  cam.z_near = 1e-4f * distance;
+  cam.z_far = 1e8f * distance;
+  if (!std::isfinite(cam.z_far)) throw InvalidInput("--camera: eye and target are too far apart");
   parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
                                      Criterion::screen_error(cam, viewport, pixels)}));
 }
@@ -125,8 +130,7 @@ std::string check_positive(const std::string& text) { return check_sign(text, fa
 
 void apply_raw_size(const std::string& text, const std::string& path, HeightFieldReadOptions& options) {
   if (text.empty()) return;
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(path);
   if (ext != ".raw" && ext != ".f32") throw InvalidInput("--raw-size is for a .raw or .f32 height field, not '" + path + "'");
   const auto wh = parse_floats(text, "--raw-size", 2);
   if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))

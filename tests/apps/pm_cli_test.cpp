@@ -179,6 +179,32 @@ TEST(PmCli, BadInputIsNamed) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// The camera's far plane was an absolute 1e7: a model in large units (the bunny scaled by 1e9) came back as
+// its base mesh. The same view of the same model at another scale refines the same vertices.
+TEST(PmCli, CameraQueriesDoNotDependOnScale) {
+  const auto dir = testing::scratch_dir("pm_cli_scale");
+  std::vector<std::size_t> vertices;
+  for (const float scale : {1e-5f, 1.0f, 1e9f}) {
+    TriMesh m = testing::make_torus(24, 12);
+    for (glm::vec3& p : m.positions) p *= scale;
+    const fs::path mesh = dir / "torus.obj", vmh = dir / "torus.vmh";
+    write_mesh(mesh.string(), m);
+    CmdResult r = run("pm build " + mesh.string() + " -o " + vmh.string() + " --quiet", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    char camera[160];
+    std::snprintf(camera, sizeof camera, "%g,%g,%g,0,0,0,40", 0.4 * scale, -2.5 * scale, 1.2 * scale);
+    r = run("pm query " + vmh.string() + " --camera " + camera + " -o " + (dir / "q.obj").string(), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::size_t v = 0;
+    ASSERT_EQ(std::sscanf(r.out.c_str(), "kim-lee: %zu vertices", &v), 1) << r.out;
+    vertices.push_back(v);
+  }
+  // Float rounding of the scaled positions moves a few nodes across the thresholds; the base mesh (what the
+  // far plane left at 1e9) has a tenth of these vertices.
+  EXPECT_GT(vertices[1], 200u);
+  for (std::size_t v : vertices) EXPECT_NEAR(double(v), double(vertices[1]), 0.03 * double(vertices[1]));
+}
+
 // `varmesh info` on hierarchy files: told by their magic (whatever the extension), summarised with the counts
 // the library reads from the same file, and refused by name when the loader refuses them.
 TEST(PmCli, InfoSummarisesHierarchyFiles) {
