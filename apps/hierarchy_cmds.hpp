@@ -42,6 +42,7 @@ struct PmBuildArgs {
   std::size_t faces = 0, vertices = 0;  ///< stop targets (0: none; neither: the smallest base mesh)
   float max_error = -1.0f;        ///< stop before a collapse whose error exceeds this (object units; < 0: none)
   double lt_finish = 4.0;         ///< QemOptions::lt_finish (quadric costs; 0: off)
+  bool lt_finish_given = false;   ///< --lt-finish on the command line (refused where it cannot apply)
   bool colors = false;            ///< GH98 colour quadrics when the mesh has vertex colours
   std::string non_manifold = "split";  ///< split | lock
   bool measure = false;           ///< report the distance from the input's vertices to the base mesh

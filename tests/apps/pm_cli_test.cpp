@@ -153,6 +153,12 @@ TEST(PmCli, BadInputIsNamed) {
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error -2", "--max-error: must be >= 0"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --faces 50 --lt-finish 0.5", "--lt-finish must be 0 or a number > 1, not 0.5"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --lt-finish 1", "--lt-finish must be"},
+      // Combinations the analysis would ignore (helper-53).
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --faces 100 --vertices 200", "--faces excludes --vertices"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --max-error 0.1 --lt-finish 3", "--lt-finish needs --faces or --vertices"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --faces 100 --cost lindstrom-turk --lt-finish 3", "--lt-finish is for --cost quadric"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --faces 100 --colors --lt-finish 3", "--lt-finish does not apply with --colors"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --colors --cost lindstrom-turk", "--cost lindstrom-turk would be ignored"},
       {"pm query " + b.vmh.string() + " -o " + out, "give --error E, --camera ... or --budget N"},
       {"pm query " + b.vmh.string() + " --error 1 --scheme fast -o " + out, "--scheme: unknown 'fast'"},
       {"pm query " + b.vmh.string() + " --error nan -o " + out, "--error must be"},
