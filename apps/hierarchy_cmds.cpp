@@ -92,7 +92,7 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
       ->each([&a](const std::string&) { a.lt_finish_given = true; });
   auto* faces = sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(CLI::NonNegativeNumber);
   sub.add_option("--vertices", a.vertices, "stop at this many vertices (instead of --faces)")->check(CLI::NonNegativeNumber)->excludes(faces);
-  sub.add_option("--max-error", a.max_error, "stop before a collapse whose error exceeds this (object units)")
+  sub.add_option("--max-error", a.max_error, "no collapse whose error exceeds this (object units): those are skipped, the others go on")
       ->check(check_non_negative);
   sub.add_flag("--colors", a.colors, "colour quadrics (GH98) when the mesh has vertex colours");
   sub.add_option("--non-manifold", a.non_manifold, "split (default): cut non-manifold edges and vertices into sheets; "
@@ -544,9 +544,10 @@ int run_pm_build(const PmBuildArgs& a) {
               "faces dropped, %zu vertex copies added\n",
               r.input_vertices, r.input_faces, r.unreferenced_vertices, r.degenerate_faces, r.duplicate_faces,
               r.added_vertex_copies);
-  std::printf("%zu collapses (rejected: %zu link, %zu flip) down to a base mesh of %zu vertices, %zu faces; %zu trees, "
+  const std::string over = a.max_error >= 0.0f ? ", " + std::to_string(st.rejected_error) + " over --max-error" : "";
+  std::printf("%zu collapses (rejected: %zu link, %zu flip%s) down to a base mesh of %zu vertices, %zu faces; %zu trees, "
               "depth %d; %.1f bytes per original face; %.3f s -> %s\n",
-              st.collapses, st.rejected_link, st.rejected_flip, st.base_vertices, st.base_faces, h.num_roots(),
+              st.collapses, st.rejected_link, st.rejected_flip, over.c_str(), st.base_vertices, st.base_faces, h.num_roots(),
               h.max_depth(), double(h.memory_bytes()) / double(h.num_faces()), st.seconds, a.output.c_str());
   if (st.lt_finished && st.collapses > st.lt_finish_from)
     std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,

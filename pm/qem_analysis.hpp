@@ -63,7 +63,9 @@ struct QemOptions {
   std::size_t target_vertices = 0;
   /// Stop when at most this many faces remain (0: no face target).
   std::size_t target_faces = 0;
-  /// Stop before a collapse whose error (object units, as in the node bound) exceeds this.
+  /// No collapse whose error (object units, as in the node bound) would exceed this: such collapses are
+  /// skipped (QemStats::rejected_error) and tried again when their neighbourhood changes; the analysis ends
+  /// when none within the limit is left (or at a target).
   double max_error = std::numeric_limits<double>::infinity();
   /// With no target at all the analysis goes down to the smallest base mesh it can reach.
   double border_penalty = 1000.0;
@@ -101,6 +103,7 @@ struct QemOptions {
 struct QemStats {
   std::size_t collapses = 0;
   std::size_t rejected_link = 0, rejected_flip = 0, rejected_depth = 0, rejected_locked = 0;
+  std::size_t rejected_error = 0;  ///< pops whose error would exceed QemOptions::max_error
   std::size_t queue_rebuilds = 0;  ///< extra passes over all edges once the queue ran dry
   bool lt_finished = false;        ///< the Lindstrom-Turk finish started (QemOptions::lt_finish)
   std::size_t lt_finish_from = 0;  ///< collapses done when it started (valid when lt_finished)

@@ -184,6 +184,33 @@ TEST(QemAnalysis, StopsAtTargets) {
   EXPECT_GT(he.num_roots(), 4u);
 }
 
+// max_error skips the collapses over the limit and goes on with the others: it used to stop at the first
+// one popped, while the queue (ordered by cost, not by that error) still held many within the limit.
+TEST(QemAnalysis, MaxErrorSkipsCollapsesOverTheLimit) {
+  const TriMesh m = make_grid(24, 20, 0.3f);
+  const VertexHierarchy full = build_vertex_hierarchy(m);
+  const float limit = 0.01f;
+  // Where the old rule stopped: the first collapse of the unlimited run whose node error exceeds the limit
+  // (the two runs make the same collapses up to there).
+  std::size_t first_over = full.num_collapses();
+  for (std::size_t i = 0; i < full.num_collapses(); ++i)
+    if (full.bound(static_cast<Index>(full.num_leaves() + i)).error > limit) {
+      first_over = i;
+      break;
+    }
+  ASSERT_LT(first_over, full.num_collapses());
+  QemOptions o;
+  o.max_error = limit;
+  QemStats st;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o, &st);
+  EXPECT_GT(st.rejected_error, 0u);
+  EXPECT_GT(st.collapses, first_over) << "the old rule stopped after " << first_over;
+  for (Index v = static_cast<Index>(h.num_leaves()); v < h.num_nodes(); ++v) EXPECT_LE(h.bound(v).error, limit * (1 + 1e-6f));
+  // What the analysis left is everything within the limit: with a larger limit it goes further.
+  o.max_error = 4 * limit;
+  EXPECT_GT(build_vertex_hierarchy(m, o).num_collapses(), h.num_collapses());
+}
+
 TEST(QemAnalysis, SphereApproximationIsClose) {
   const TriMesh m = make_icosphere(4);  // 2562 vertices on the unit sphere
   QemOptions o;
