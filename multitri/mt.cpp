@@ -305,6 +305,33 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
         if (std::binary_search(i1.begin(), i1.end(), e))
           fail("keeps an interior edge of its pre-image (not a minimal modification)", n);
     }
+    // Every vertex has one origin: the base mesh, or the one node whose image brings it in (a corner of the
+    // image that is no corner of the pre-image). An image corner from elsewhere - a vertex of the base or of
+    // another node's image - passes every boundary test, yet puts a directed edge twice into some front
+    // (found by re-sealing edited .vrm files).
+    std::vector<NodeId> origin(positions_.size(), kInvalid);
+    for (FaceId f : created(0))
+      for (int k = 0; k < 3; ++k) origin[corners_[3 * f + k]] = 0;
+    std::vector<Index> own_pre;
+    for (NodeId n = 1; n < num_nodes; ++n) {
+      own_pre.clear();
+      for (FaceId f : removed(n)) own_pre.insert(own_pre.end(), &corners_[3 * f], &corners_[3 * f] + 3);
+      const bool few = own_pre.size() <= 12;  // splits and swaps: a linear search beats the sort
+      if (!few) std::sort(own_pre.begin(), own_pre.end());
+      for (FaceId f : created(n))
+        for (int k = 0; k < 3; ++k) {
+          const Index v = corners_[3 * f + k];
+          if (origin[v] == n) continue;
+          if (few ? std::find(own_pre.begin(), own_pre.end(), v) != own_pre.end()
+                  : std::binary_search(own_pre.begin(), own_pre.end(), v))
+            continue;
+          if (origin[v] != kInvalid)
+            fail("brings in vertex " + std::to_string(v) + ", which " +
+                     (origin[v] == 0 ? std::string("the base mesh uses") : "node " + std::to_string(origin[v]) + " brings in"),
+                 n);
+          origin[v] = n;
+        }
+    }
   }
 
   // Node graph (parent = creator of a removed face) and a parents-first order (Kahn).

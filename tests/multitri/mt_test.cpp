@@ -147,6 +147,32 @@ TEST(Mt, RejectsBorderChangesOtherThanSubdivision) {
   EXPECT_NE(msg.find("other than by subdividing edge"), std::string::npos) << msg;
 }
 
+// A node's image may bring in only vertices of its own: an image whose centre is a vertex of another part of
+// the base keeps the pre-image's boundary and every other rule, yet glues two patches at that vertex in
+// every front that applies it (helper-52 found it in re-sealed .vrm files).
+TEST(Mt, RejectsImagesThatBorrowAVertex) {
+  for (const bool borrow_from_node : {false, true}) {
+    MtBuilder b;
+    for (int i = 0; i < 4; ++i) b.add_vertex({float(i == 1 || i == 2), float(i >= 2), 0.0f});  // square 0..3
+    for (int i = 0; i < 3; ++i) b.add_vertex({5.0f + float(i == 1), float(i == 2), 0.0f});  // triangle 4..6
+    b.add_vertex({5.5f, 0.3f, 0.0f});                                                   // 7: inside it
+    const FaceId t0 = b.add_face(0, 1, 2), t1 = b.add_face(0, 2, 3), far = b.add_face(4, 5, 6);
+    const FaceId base[] = {t0, t1, far};
+    b.set_base(base);
+    if (borrow_from_node) {  // vertex 7 first comes in with a split of the far triangle
+      const FaceId r[] = {far}, c[] = {b.add_face(4, 5, 7), b.add_face(5, 6, 7), b.add_face(6, 4, 7)};
+      b.add_node(NodeKind::kGeneric, r, c, 0.1f);
+    }
+    const Index centre = borrow_from_node ? 7 : 5;
+    const FaceId r[] = {t0, t1};
+    const FaceId c[] = {b.add_face(0, 1, centre), b.add_face(1, 2, centre), b.add_face(2, 3, centre), b.add_face(3, 0, centre)};
+    b.add_node(NodeKind::kSplit, r, c, 0.1f);
+    const std::string msg = message_of(std::move(b));
+    EXPECT_NE(msg.find("brings in vertex " + std::to_string(centre)), std::string::npos) << msg;
+    EXPECT_NE(msg.find(borrow_from_node ? "node 1 brings in" : "the base mesh uses"), std::string::npos) << msg;
+  }
+}
+
 // A kind outside the enumeration built, and the Mt then failed its own file format.
 TEST(Mt, RejectsUnknownNodeKind) {
   Square s;
