@@ -119,7 +119,8 @@ std::string check_sign(const std::string& text, bool zero_ok) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
-  if (std::isnan(v)) return "";
+  if (std::isnan(v)) return "";  // named by the command, with what it means there
+  if (std::isinf(v)) return "must be a finite number, not " + text;
   if (zero_ok ? v < 0.0 : !(v > 0.0)) return std::string("must be ") + (zero_ok ? ">= 0" : "> 0") + ", not " + text;
   return "";
 }
@@ -144,8 +145,8 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
   Box3 box;
   for (Index i : mesh.indices) box.add(mesh.positions[i]);
   if (!std::isfinite(box.diagonal()))
-    throw IoError(path, "the coordinates span more than float can measure (the bounding box's diagonal overflows); "
-                        "scale the model down");
+    throw IoError(path, "the coordinates span more than about 1.8e19: squared distances overflow float (the "
+                        "bounding box's diagonal cannot be measured); scale the model down");
   return mesh;
 }
 

@@ -403,12 +403,20 @@ CaseInput image_case(const Options& o) {
     std::string lower = ext;
     for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     img = lower == ".pgm" ? read_pgm(file) : read_png(file);
-    const std::size_t factor = std::max<std::size_t>(1, (std::max(img.width, img.height) + o.grid - 1) / o.grid);
+    // The long side down to about --size, but the short side kept at 2 or more (a 1000 x 2 picture became
+    // 125 x 1, too thin for a grid mesh).
+    const std::size_t factor = std::max<std::size_t>(
+        1, std::min((std::max(img.width, img.height) + o.grid - 1) / o.grid, std::min(img.width, img.height) / 2));
     img = downsample_image(img, factor);
     c.source = fs::path(file).filename().string() + (factor > 1 ? " / " + std::to_string(factor) : std::string());
   }
   c.source += " (" + std::to_string(img.width) + " x " + std::to_string(img.height) + ")";
-  c.mesh = image_grid_mesh(img);
+  try {
+    c.mesh = image_grid_mesh(img);
+  } catch (const InvalidInput& e) {
+    if (file.empty()) throw;
+    throw IoError(file, e.what());  // e.g. a 1 x 100 picture
+  }
   c.features = top_fraction_features(sobel_magnitude(img), o.feature_fraction);
   c.picture = std::move(img);
   c.top_down = true;

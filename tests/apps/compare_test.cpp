@@ -169,5 +169,27 @@ TEST(Compare, BadOptionsFailWithOneLineAndExitCode1) {
   EXPECT_NE(r.err.find("bad.png"), std::string::npos) << r.err;
 }
 
+// A wide picture keeps a short side of 2 or more when it is scaled down (1000 x 2 became 125 x 1, refused by
+// the grid builder without naming the file); a picture too thin to start with is refused by name.
+TEST(Compare, ThinPicturesAreScaledOrNamed) {
+  const fs::path dir = testing::scratch_dir("compare_thin");
+  auto picture = [&](std::size_t w, std::size_t h, const char* name) {
+    Image img;
+    img.width = w, img.height = h, img.channels = 1;
+    img.pixels.resize(w * h);
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<std::uint8_t>((i * 37) % 256);
+    write_png((dir / name).string(), img);
+    return (dir / name).string();
+  };
+  const std::string wide = picture(1000, 2, "wide.png"), thin = picture(1, 100, "thin.png");
+  CmdResult r = run("--cases image --quick --quiet --image " + wide + " --out " + (dir / "w").string(), dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "w" / "table.md"));
+  r = run("--cases image --quick --quiet --image " + thin + " --out " + (dir / "t").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(count(r.err, "\n"), 1) << r.err;
+  EXPECT_NE(r.err.find(thin + ": "), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace varmesh

@@ -162,6 +162,8 @@ TEST(PmCli, BadInputIsNamed) {
       {"pm query " + b.vmh.string() + " -o " + out, "give --error E, --camera ... or --budget N"},
       {"pm query " + b.vmh.string() + " --error 1 --scheme fast -o " + out, "--scheme: unknown 'fast'"},
       {"pm query " + b.vmh.string() + " --error nan -o " + out, "--error must be"},
+      {"pm query " + b.vmh.string() + " --error inf -o " + out, "--error: must be a finite number"},
+      {"pm query " + b.vmh.string() + " --camera 0,0,3,0,0,0,40 --viewport inf -o " + out, "--viewport: must be a finite number"},
       {"pm query " + b.mesh.string() + " --error 1 -o " + out, b.mesh.string()},
   };
   for (const Case& c : cases) {
