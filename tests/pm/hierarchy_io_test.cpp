@@ -68,6 +68,18 @@ Layout layout_of(const VertexHierarchy& h, const std::vector<std::uint8_t>& imag
   return a;
 }
 
+// A hierarchy, its file image and the image's layout: what the edit-and-reseal tests start from.
+struct Encoded {
+  VertexHierarchy h;
+  std::vector<std::uint8_t> good;
+  Layout at;
+};
+Encoded encoded(VertexHierarchy h) {
+  std::vector<std::uint8_t> image = encode_vertex_hierarchy(h);
+  const Layout at = layout_of(h, image);
+  return {std::move(h), std::move(image), at};
+}
+
 std::uint64_t get_le(const Bytes& b, std::size_t at, int width) {
   std::uint64_t v = 0;
   for (int k = 0; k < width; ++k) v |= static_cast<std::uint64_t>(b[at + static_cast<std::size_t>(k)]) << (8 * k);
@@ -469,9 +481,8 @@ TEST(HierarchyIo, ChecksumMismatchNamesTheChecksum) {
 
 // Damage behind a valid checksum (a buggy writer, or a deliberate edit): the parser and the builder catch it.
 TEST(HierarchyIo, SemanticErrorsBehindAValidChecksum) {
-  const VertexHierarchy h = build_locked_colored(4);
-  const Bytes good = encode_vertex_hierarchy(h);
-  const Layout at = layout_of(h, good);
+  const Encoded fixture = encoded(build_locked_colored(4));
+  const auto& [h, good, at] = fixture;
   auto edited = [&](std::size_t offset, std::uint64_t value, int width) {
     Bytes b = good;
     put_le(b, offset, value, width);
@@ -538,9 +549,8 @@ void rejected(Bytes b, const std::string& reason) {
 // ring naming a node that is not there), read out of bounds (two equal cut vertices) or build a wrong mesh
 // (fl^ and fr^ swapped with their cut vertices). Found by a review; each edit passed the reader before.
 TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
-  const VertexHierarchy h = build_vertex_hierarchy(make_grid(5, 4));
-  const Bytes good = encode_vertex_hierarchy(h);
-  const Layout at = layout_of(h, good);
+  const Encoded fixture = encoded(build_vertex_hierarchy(make_grid(5, 4)));
+  const auto& [h, good, at] = fixture;
   const std::size_t nl = h.num_leaves(), nc = h.num_collapses();
   auto record_at = [&](std::size_t i) { return at.records + 40 * i; };
   // A collapse with both sides (fl^ and fr^).
@@ -607,9 +617,8 @@ TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
 // bounds (list_erase), built faces other than the stored ones, or (Xia-Varshney) looped forever. Found by
 // fuzzing past the checksum; validate() now replays the collapses on the original faces.
 TEST(HierarchyIo, TopologyNoCollapseSequenceMakesIsRejected) {
-  const VertexHierarchy h = build_vertex_hierarchy(make_grid(8, 7));
-  const Bytes good = encode_vertex_hierarchy(h);
-  const Layout at = layout_of(h, good);
+  const Encoded fixture = encoded(build_vertex_hierarchy(make_grid(8, 7)));
+  const auto& [h, good, at] = fixture;
   const std::size_t nl = h.num_leaves(), nc = h.num_collapses();
   {
     // A base face turned over: its edges now run the same way as its neighbours'.
@@ -654,9 +663,8 @@ TEST(HierarchyIo, TopologyNoCollapseSequenceMakesIsRejected) {
 // reader accepts leaves a hierarchy on which every scheme runs its operations to the end and stays valid.
 // A small deterministic fuzzer; run under the sanitizers in CI, where an out-of-bounds access fails it.
 TEST(HierarchyIo, AcceptedEditsBehindAValidChecksumAreSafeToRun) {
-  const VertexHierarchy h = build_vertex_hierarchy(make_grid(6, 5));
-  const Bytes good = encode_vertex_hierarchy(h);
-  const Layout at = layout_of(h, good);
+  const Encoded fixture = encoded(build_vertex_hierarchy(make_grid(6, 5)));
+  const auto& [h, good, at] = fixture;
   const std::size_t nl = h.num_leaves(), nn = h.num_nodes();
   std::mt19937 rng(20261124);
   std::size_t accepted = 0, refused = 0;
