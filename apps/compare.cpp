@@ -269,24 +269,6 @@ TriMesh make_bumpy_icosphere(int levels) {
   return m;
 }
 
-TriMesh make_torus(int n, int m, float big_r, float small_r) {
-  TriMesh g;
-  const float two_pi = 6.28318530718f;
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const float u = two_pi * static_cast<float>(i) / static_cast<float>(n), v = two_pi * static_cast<float>(j) / static_cast<float>(m);
-      const float r = small_r * (1.0f + 0.15f * std::sin(3.0f * u));
-      g.positions.push_back({(big_r + r * std::cos(v)) * std::cos(u), (big_r + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-    }
-  auto id = [&](int i, int j) { return static_cast<Index>(((j + m) % m) * n + (i + n) % n); };
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
-      g.indices.insert(g.indices.end(), {a, b, c, a, c, d});
-    }
-  return g;
-}
-
 // ---- options ----
 
 struct Options {
@@ -492,7 +474,7 @@ CaseInput model_case(const Options& o, const std::string& name) {
   if (file.empty()) {
     spec.up = {0, 0, 1};
     if (name == "cow") {
-      c.mesh = o.quick ? make_torus(32, 16, 1.0f, 0.35f) : make_torus(120, 60, 1.0f, 0.35f);
+      c.mesh = o.quick ? varmesh::make_torus(32, 16, 1.0f, 0.35f, 0.15f) : varmesh::make_torus(120, 60, 1.0f, 0.35f, 0.15f);
       c.source = "generated torus";
     } else {
       c.mesh = make_bumpy_icosphere(o.quick ? 3 : (name == "bunny" ? 5 : 6));

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <string>
 #include <unordered_map>
 
@@ -41,6 +42,29 @@ TriMesh make_icosphere(int levels) {
     m.indices = std::move(next);
   }
   return m;
+}
+
+TriMesh make_torus(int n, int m, float major_radius, float minor_radius, float bump) {
+  if (n < 3 || m < 3 || static_cast<long long>(n) * m > (1LL << 24))
+    throw InvalidInput("make_torus: n and m must be at least 3 and n * m at most 2^24, not " + std::to_string(n) + " x " +
+                       std::to_string(m));
+  TriMesh g;
+  const float two_pi = 2.0f * std::numbers::pi_v<float>;
+  g.positions.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(m));
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const float u = two_pi * static_cast<float>(i) / static_cast<float>(n), v = two_pi * static_cast<float>(j) / static_cast<float>(m);
+      const float r = minor_radius * (1.0f + bump * std::sin(3.0f * u));
+      g.positions.push_back({(major_radius + r * std::cos(v)) * std::cos(u), (major_radius + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+    }
+  auto id = [&](int i, int j) { return static_cast<Index>(((j + m) % m) * n + (i + n) % n); };
+  g.indices.reserve(6 * g.positions.size());
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      g.indices.insert(g.indices.end(), {a, b, c, a, c, d});
+    }
+  return g;
 }
 
 }  // namespace varmesh

@@ -2,7 +2,6 @@
 // Small generated meshes for the pm tests: runnable anywhere (no shared data needed).
 #include <cmath>
 #include <map>
-#include <numbers>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -13,6 +12,7 @@
 namespace varmesh::testing {
 
 using varmesh::make_icosphere;
+using varmesh::make_torus;
 
 /// Regular grid of (n+1) x (m+1) vertices on z = f(x, y) over [0,1]^2, alternating diagonals; has a border.
 inline TriMesh make_grid(int n, int m, float bump = 0.2f) {
@@ -28,24 +28,6 @@ inline TriMesh make_grid(int n, int m, float bump = 0.2f) {
       const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
       if ((i + j) % 2 == 0) g.indices.insert(g.indices.end(), {a, b, c, a, c, d});
       else g.indices.insert(g.indices.end(), {a, b, d, b, c, d});
-    }
-  return g;
-}
-
-/// Torus (genus 1) with n x m quads split in two.
-inline TriMesh make_torus(int n, int m, float R = 1.0f, float r = 0.35f) {
-  TriMesh g;
-  const float two_pi = 2.0f * std::numbers::pi_v<float>;
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const float u = two_pi * static_cast<float>(i) / static_cast<float>(n), v = two_pi * static_cast<float>(j) / static_cast<float>(m);
-      g.positions.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-    }
-  auto id = [&](int i, int j) { return static_cast<Index>(((j + m) % m) * n + (i + n) % n); };
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
-      g.indices.insert(g.indices.end(), {a, b, c, a, c, d});
     }
   return g;
 }

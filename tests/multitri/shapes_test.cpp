@@ -1,0 +1,75 @@
+// The generated shapes: closed, oriented outwards, of the topology and size they promise. Checked by
+// analyze_mesh (topology, an independent implementation) and by the signed volume and distances.
+#include "multitri/shapes.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <tuple>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "multitri/errors.hpp"
+#include "multitri/mesh_report.hpp"
+
+namespace varmesh {
+namespace {
+
+double signed_volume(const TriMesh& m) {
+  double v = 0.0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const glm::dvec3 a(m.positions[m.indices[3 * f]]), b(m.positions[m.indices[3 * f + 1]]), c(m.positions[m.indices[3 * f + 2]]);
+    v += glm::dot(a, glm::cross(b, c)) / 6.0;
+  }
+  return v;
+}
+
+TEST(Shapes, IcosphereIsAClosedOutwardSphere) {
+  for (int levels : {0, 1, 3}) {
+    const TriMesh m = make_icosphere(levels);
+    const MeshReport r = analyze_mesh(m);
+    EXPECT_EQ(r.faces, 20u << (2 * levels));
+    EXPECT_TRUE(r.closed);
+    EXPECT_EQ(r.genus, 0);
+    EXPECT_EQ(r.non_manifold_vertices, 0u);
+    for (const glm::vec3& p : m.positions) EXPECT_NEAR(glm::length(p), 1.0f, 1e-6f);
+    // Outwards: positive volume, below the unit ball's.
+    EXPECT_GT(signed_volume(m), 0.0);
+    EXPECT_LT(signed_volume(m), 4.0 / 3.0 * std::numbers::pi);
+  }
+  EXPECT_THROW(make_icosphere(-1), InvalidInput);
+  EXPECT_THROW(make_icosphere(11), InvalidInput);
+}
+
+TEST(Shapes, TorusIsAClosedOutwardGenusOneSurface) {
+  for (const auto& [n, m, bump] : {std::tuple{3, 3, 0.0f}, std::tuple{16, 10, 0.0f}, std::tuple{40, 24, 0.15f}}) {
+    const float big = 1.0f, small = 0.35f;
+    const TriMesh t = make_torus(n, m, big, small, bump);
+    const MeshReport r = analyze_mesh(t);
+    EXPECT_EQ(r.vertices, static_cast<std::size_t>(n * m));
+    EXPECT_EQ(r.faces, static_cast<std::size_t>(2 * n * m));
+    EXPECT_TRUE(r.closed);
+    EXPECT_EQ(r.components, 1u);
+    EXPECT_EQ(r.euler_characteristic, 0);
+    EXPECT_EQ(r.genus, 1);
+    EXPECT_EQ(r.degenerate_faces + r.zero_area_faces + r.duplicate_faces, 0u);
+    // Every vertex on its tube: distance to the core circle within [small (1 - bump), small (1 + bump)].
+    for (const glm::vec3& p : t.positions) {
+      const double core = std::hypot(p.x, p.y) - big;
+      const double d = std::hypot(core, static_cast<double>(p.z));
+      EXPECT_GE(d, small * (1.0 - bump) - 1e-5);
+      EXPECT_LE(d, small * (1.0 + bump) + 1e-5);
+    }
+    // Outwards, and no more than the solid torus of the largest tube radius holds.
+    const double vol = signed_volume(t);
+    const double rmax = small * (1.0 + bump);
+    EXPECT_GT(vol, 0.0);
+    EXPECT_LT(vol, 2.0 * std::numbers::pi * std::numbers::pi * big * rmax * rmax);
+  }
+  EXPECT_THROW(make_torus(2, 8), InvalidInput);
+  EXPECT_THROW(make_torus(8, 2), InvalidInput);
+  EXPECT_THROW(make_torus(1 << 13, 1 << 12), InvalidInput);
+}
+
+}  // namespace
+}  // namespace varmesh
