@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -63,9 +64,14 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info = nullptr);
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
                             const Image* picture);
 
-/// A temporary name beside `target` for writing it before it is moved into place: same folder (the rename
-/// stays within one file system), same extension (writers pick the format by it), hidden, with the pid.
-std::filesystem::path staged_path_beside(const std::string& target);
+/// Writes the file `target` and what goes with it, all or nothing: write(staged) writes the file under a
+/// temporary name beside `target` (same folder, so the rename stays within one file system; same extension,
+/// since writers pick the format by it; hidden, with the pid), then then_() writes the rest (pictures), then
+/// the file is renamed into place. `target` naming a folder is refused before anything is written. On any
+/// failure the staged file is removed and `target` is left as it was (an existing file included); an
+/// IoError of write() is rethrown naming `target`, not the staging name.
+void write_staged(const std::string& target, const std::function<void(const std::string& staged)>& write,
+                  const std::function<void()>& then_);
 
 /// An output folder written all or nothing: files go to a staging folder inside it (path(), a fresh name
 /// per object) and are moved into the folder by commit(). Without commit() - an exception on the way - the

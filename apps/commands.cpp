@@ -8,6 +8,7 @@
 #include <exception>
 #include <cctype>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include <unistd.h>
@@ -150,9 +151,32 @@ TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
   return mesh;
 }
 
-std::filesystem::path staged_path_beside(const std::string& target) {
-  const std::filesystem::path t(target);
-  return t.parent_path() / ("." + t.stem().string() + ".partial-" + std::to_string(::getpid()) + t.extension().string());
+void write_staged(const std::string& target, const std::function<void(const std::string& staged)>& write,
+                  const std::function<void()>& then_) {
+  namespace fs = std::filesystem;
+  const fs::path t(target);
+  std::error_code ec;
+  // Checked first: the rename at the end would fail after the rest (the pictures) had been written.
+  if (fs::is_directory(fs::symlink_status(t, ec))) throw IoError(target, "is a folder: the file cannot be put there");
+  const fs::path staged = t.parent_path() / ("." + t.stem().string() + ".partial-" + std::to_string(::getpid()) + t.extension().string());
+  try {
+    write(staged.string());
+  } catch (const IoError& e) {
+    fs::remove(staged, ec);
+    throw IoError(target, e.reason());  // the user's name, not the staging one
+  }
+  try {
+    then_();
+  } catch (...) {
+    fs::remove(staged, ec);
+    throw;
+  }
+  fs::rename(staged, t, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    fs::remove(staged, ec);
+    throw IoError(target, "cannot move the written file into place: " + why);
+  }
 }
 
 void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, const std::string& png_path,
@@ -161,30 +185,10 @@ void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, c
     write_mesh(mesh_path, mesh);
     return;
   }
-  // The mesh goes to a temporary name beside its target (same extension: write_mesh picks the format by it),
-  // then the picture to its place, and only then the mesh is renamed into place. A picture that cannot be
-  // written leaves whatever was at mesh_path as it was (removing the new mesh instead had deleted a file
-  // the user already had there).
-  namespace fs = std::filesystem;
-  const fs::path target(mesh_path);
-  const fs::path staged = staged_path_beside(mesh_path);
-  try {
-    write_mesh(staged.string(), mesh);
-  } catch (const IoError& e) {
-    throw IoError(mesh_path, e.reason());  // the user's name, not the staging one
-  }
-  std::error_code ec;
-  try {
-    write_png(png_path, *picture);
-  } catch (...) {
-    fs::remove(staged, ec);
-    throw;
-  }
-  fs::rename(staged, target, ec);
-  if (ec) {
-    fs::remove(staged, ec);
-    throw IoError(mesh_path, "cannot move the written mesh into place");
-  }
+  // The mesh is moved into place after the picture is written: a picture that cannot be written leaves
+  // whatever was at mesh_path as it was (removing the new mesh instead had deleted a file the user had).
+  write_staged(mesh_path, [&](const std::string& staged) { write_mesh(staged, mesh); },
+               [&] { write_png(png_path, *picture); });
 }
 
 StagedFolder::StagedFolder(const std::string& folder) : folder_(folder) {

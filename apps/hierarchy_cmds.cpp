@@ -305,29 +305,13 @@ void write_hierarchy_and_pictures(const std::string& output, const Mt& mt, const
     write_mt(output, mt);
     return;
   }
+  write_staged(output, [&](const std::string& staged) { write_mt(staged, mt); },
+               [&] {
+                 StagedFolder folder(dir);
+                 for (const Picture& p : pictures) write_png(folder.path(p.name), p.image);
+                 folder.commit();
+               });
   namespace fs = std::filesystem;
-  const fs::path target(output);
-  const fs::path staged = staged_path_beside(output);
-  std::error_code ec;
-  if (fs::is_directory(fs::symlink_status(target, ec))) throw IoError(output, "is a folder: the hierarchy cannot be put there");
-  try {
-    write_mt(staged.string(), mt);
-  } catch (const IoError& e) {
-    throw IoError(output, e.reason());  // the user's name, not the staging one
-  }
-  try {
-    StagedFolder folder(dir);
-    for (const Picture& p : pictures) write_png(folder.path(p.name), p.image);
-    folder.commit();
-  } catch (...) {
-    fs::remove(staged, ec);
-    throw;
-  }
-  fs::rename(staged, target, ec);
-  if (ec) {
-    fs::remove(staged, ec);
-    throw IoError(output, "cannot move the written hierarchy into place: " + ec.message());
-  }
   for (const Picture& p : pictures) std::printf("  %s: %zu faces\n", (fs::path(dir) / p.name).string().c_str(), p.faces);
 }
 

@@ -313,6 +313,23 @@ TEST(Robustness, AFailedPictureKeepsTheUsersExistingMesh) {
     EXPECT_EQ(e.path().filename().string().find(".partial-"), std::string::npos) << e.path();
 }
 
+// A mesh path naming a folder was found only at the final rename, after the picture had been written: the
+// run failed but left a new picture behind. It is refused before anything is written now.
+TEST(Robustness, AMeshPathThatIsAFolderWritesNoPicture) {
+  const auto dir = testing::scratch_dir("robust_mesh_folder");
+  const fs::path field = write_small_terrain(dir);
+  fs::create_directories(dir / "m.obj");
+  const std::string png = (dir / "m.png").string();
+  const CmdResult r = run("terrain " + field.string() + " --raw-size 17,17 --error 1 -o " + (dir / "m.obj").string() + " --png " + png, dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (dir / "m.obj").string() + ": is a folder")) << r.err;
+  EXPECT_FALSE(fs::exists(png));
+  EXPECT_TRUE(fs::is_directory(dir / "m.obj"));
+  for (const auto& e : fs::directory_iterator(dir))  // no staging file left behind
+    EXPECT_EQ(e.path().filename().string().find(".partial-"), std::string::npos) << e.path();
+}
+
 // A failed compare took back the files it had overwritten (an earlier run's pictures), deleted a dangling
 // symbolic link given as --out, and left the parents it had created.
 TEST(Robustness, AFailedCompareLeavesTheOutputFolderAsItWas) {
