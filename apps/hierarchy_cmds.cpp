@@ -1,7 +1,6 @@
 // `varmesh build` and `varmesh query` (see hierarchy_cmds.hpp).
 #include "apps/hierarchy_cmds.hpp"
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -108,24 +107,6 @@ void add_pm_query_options(CLI::App& sub, PmQueryArgs& a) {
 }
 
 namespace {
-
-// --levels asks for base faces x 2^levels finest faces; the build peaks at about 260 bytes per finest face
-// (cow: 188 MB at 743k). Refused by name when that exceeds the machine's memory, before anything is
-// allocated (the library only caps the count at 2^31 faces, ~500 GB; past the memory the allocation fails
-// with a bare bad_alloc, or the kernel kills the process).
-void check_semiregular_memory(std::size_t base_faces, int levels) {
-  if (levels < 0 || levels > 40) return;  // build_semiregular_mt names an impossible level count
-  const double finest = double(base_faces) * std::ldexp(1.0, levels);
-  const double need = 260.0 * finest;
-  const double pages = double(::sysconf(_SC_PHYS_PAGES)), page = double(::sysconf(_SC_PAGESIZE));
-  const double have = pages > 0 && page > 0 ? pages * page : 0.0;
-  if (have > 0.0 && need > have) {
-    char text[200];
-    std::snprintf(text, sizeof text, "build: --levels %d on %zu base faces makes %.3g faces and needs about %.1f GB; this machine has %.1f GB",
-                  levels, base_faces, finest, need / 1e9, have / 1e9);
-    throw InvalidInput(text);
-  }
-}
 
 AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   AdaptiveOptions o;
@@ -354,7 +335,6 @@ int run_build(const BuildArgs& a) {
     const TriMesh base = read_input_mesh(a.input);
     SemiRegularInfo info;
     const int levels = a.levels < 0 ? 4 : a.levels;
-    check_semiregular_memory(base.num_faces(), levels);
     try {
       mt = build_semiregular_mt(base, levels, {}, &info);
     } catch (const InvalidInput& e) {

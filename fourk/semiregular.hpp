@@ -135,8 +135,9 @@ int max_semiregular_levels(std::size_t faces) noexcept;
 /// Pairs the faces of `base` (match_dual_faces) and bisects them `levels` times, as a 4-k hierarchy.
 /// Face i of the hierarchy is base face i up to a cyclic shift of its corners (marked edge first);
 /// vertex i = base vertex i, new vertices follow level by level. Throws InvalidInput naming the
-/// parameter when levels < 0 or |base| 2^levels >= 2^31 (checked before anything is allocated), and as
-/// match_dual_faces otherwise. Cost: O(|base| 2^levels) time and ~2 |base| 2^levels faces of storage
+/// parameter when levels < 0, |base| 2^levels >= 2^31 or the build would need more than the machine's
+/// physical memory (about 90 bytes per finest face; 260 for build_semiregular_mt), all checked before
+/// anything is allocated, and as match_dual_faces otherwise. Cost: O(|base| 2^levels) time and ~2 |base| 2^levels faces of storage
 /// (FourKMesh::memory_bytes), plus the matching.
 FourKMesh build_semiregular_fourk(const TriMesh& base, int levels, const SemiRegularOptions& options = {},
                                   SemiRegularInfo* info = nullptr);

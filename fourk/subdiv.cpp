@@ -28,6 +28,7 @@
 #include <glm/geometric.hpp>
 
 #include "multitri/errors.hpp"
+#include "multitri/huge_pages.hpp"
 
 namespace varmesh {
 
@@ -591,16 +592,6 @@ StencilTable StencilTable::after(const StencilTable& first) const {
 }
 
 namespace {
-
-// Physical memory in bytes, or 0 when unknown.
-double physical_memory_bytes() noexcept {
-#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
-  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-  return pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
-#else
-  return 0.0;
-#endif
-}
 
 // Throws when `steps` is negative or too large; returns the number of positions after `steps` steps.
 std::size_t check_steps(const SubdivTopology& t, int steps) {

@@ -16,6 +16,7 @@
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
+#include <unistd.h>
 
 namespace varmesh {
 
@@ -52,5 +53,14 @@ void huge_deallocate(void* p, std::size_t bytes) noexcept {
 void* huge_allocate(std::size_t bytes) { return ::operator new(bytes); }
 void huge_deallocate(void* p, std::size_t bytes) noexcept { ::operator delete(p, bytes); }
 #endif
+
+double physical_memory_bytes() noexcept {
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  return pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
+#else
+  return 0.0;
+#endif
+}
 
 }  // namespace varmesh

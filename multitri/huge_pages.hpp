@@ -25,6 +25,10 @@ struct HugePageAllocator {
   template <class U> bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
 };
 
+/// Physical memory of this machine in bytes, or 0 when unknown. For refusing, before allocating, work that
+/// could not fit (the alternative is a bare bad_alloc or the kernel's out-of-memory killer half-way).
+double physical_memory_bytes() noexcept;
+
 template <class T> using HugeVector = std::vector<T, HugePageAllocator<T>>;
 
 }  // namespace varmesh

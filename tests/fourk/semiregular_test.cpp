@@ -27,6 +27,7 @@
 
 #include "fourk/bisection.hpp"
 #include "multitri/errors.hpp"
+#include "multitri/huge_pages.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/mt_front.hpp"
 #include "multitri/mt_metrics.hpp"
@@ -839,6 +840,12 @@ TEST(SemiRegular, BadInputThrowsNamingTheCulprit) {
   expect_message([] { build_semiregular_mt(square(), 30); }, "levels", InvalidInput::kNoElement);
   expect_message([] { build_semiregular_mt(torus(25, 20), 22); }, "2^31", InvalidInput::kNoElement);
   expect_message([] { build_semiregular_mt(square(), 1000); }, "levels", InvalidInput::kNoElement);
+  // Within 2^31 faces but beyond the machine's memory (2 x 2^29 faces: ~97 GB for the FourKMesh, ~280 GB
+  // with the Mt): refused by name before anything is allocated, not ended by bad_alloc or the OOM killer.
+  if (physical_memory_bytes() > 0.0 && physical_memory_bytes() < 90e9) {
+    expect_message([] { build_semiregular_fourk(square(), 29); }, "GB; this machine has", InvalidInput::kNoElement);
+    expect_message([] { build_semiregular_mt(square(), 29); }, "GB; this machine has", InvalidInput::kNoElement);
+  }
   TriMesh degenerate = icosahedron();
   degenerate.indices[3 * 7 + 1] = degenerate.indices[3 * 7];
   expect_message([&] { build_semiregular_mt(degenerate, 1); }, "face 7", 7);
