@@ -36,6 +36,8 @@ void parse_collapse_cost(const std::string& text, CollapseCost& cost, bool& pres
 
 /// A mesh file name: the extension .obj, .off or .ply, in any case (as read_mesh and write_mesh take them).
 bool is_mesh_file(const std::string& path);
+/// The extension of `path` with its dot, in lower case (".obj" for "a/B.OBJ"; empty when there is none).
+std::string lower_extension(const std::string& path);
 /// Output-name checks made before any work, so that a wrong name costs nothing and writes nothing. Throw
 /// InvalidInput "<command>: <option> must end in ..., not '<path>'". require_png accepts an empty path (no
 /// picture asked for).

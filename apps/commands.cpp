@@ -92,13 +92,11 @@ void parse_collapse_cost(const std::string& text, CollapseCost& cost, bool& pres
   else if (text != "quadric") throw InvalidInput("--cost: unknown '" + text + "' (known: quadric, quadric-plain, lindstrom-turk)");
 }
 
-namespace {
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
-}  // namespace
 
 bool is_mesh_file(const std::string& path) {
   const std::string ext = lower_extension(path);

@@ -381,10 +381,7 @@ CaseInput image_case(const Options& o) {
     img = make_feature_test_image(o.grid);
     c.source = "generated discs and gradient";
   } else {
-    const std::string ext = fs::path(file).extension().string();
-    std::string lower = ext;
-    for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    img = lower == ".pgm" ? read_pgm(file) : read_png(file);
+    img = lower_extension(file) == ".pgm" ? read_pgm(file) : read_png(file);
     // The long side down to about --size, but the short side kept at 2 or more (a 1000 x 2 picture became
     // 125 x 1, too thin for a grid mesh).
     const std::size_t factor = std::max<std::size_t>(
