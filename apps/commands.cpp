@@ -9,6 +9,7 @@
 #include <cctype>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include <unistd.h>
@@ -119,7 +120,8 @@ std::string check_sign(const std::string& text, bool zero_ok) {
   const double v = std::strtod(text.c_str(), &end);
   if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
   if (std::isnan(v)) return "";  // named by the command, with what it means there
-  if (std::isinf(v)) return "must be a finite number, not " + text;
+  // The options are floats: a value past FLT_MAX (1e39) would become inf when CLI11 stores it.
+  if (std::isinf(v) || std::abs(v) > double(std::numeric_limits<float>::max())) return "must be a finite number, not " + text;
   if (zero_ok ? v < 0.0 : !(v > 0.0)) return std::string("must be ") + (zero_ok ? ">= 0" : "> 0") + ", not " + text;
   return "";
 }

@@ -111,7 +111,10 @@ namespace {
 AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   AdaptiveOptions o;
   o.tolerance = a.tolerance;  // <= 0: not given (the option itself refuses values <= 0)
-  if (a.levels >= 0) o.max_level = a.levels;  // build_adaptive_* name a level outside 1..48
+  if (a.levels >= 0) {
+    if (a.levels < 1 || a.levels > 48) throw InvalidInput("build: --levels must be in 1..48 for --method adaptive, not " + std::to_string(a.levels));
+    o.max_level = a.levels;
+  }
   HeightFieldReadOptions ro;
   apply_raw_size(a.raw_size, a.input, ro);  // refuses --raw-size for anything but a .raw height field
   if (a.input == "torus" || a.input == "saddle") {
@@ -187,7 +190,7 @@ bool hierarchy_info(const std::string& path) {
     const double diag = glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo));
     float worst = 0.0f;
     for (Index root : h.roots()) worst = std::max(worst, h.bound(root).error);
-    std::printf("error bound of the base mesh (largest root): %.6g (%.2f e-4 of the bounding-box diagonal %.6g)\n",
+    std::printf("node error of the base mesh, an estimate of its distance to the input (largest root): %.6g (%.2f e-4 of the bounding-box diagonal %.6g)\n",
                 double(worst), diag > 0.0 ? 1e4 * double(worst) / diag : 0.0, diag);
     return true;
   }
@@ -279,7 +282,9 @@ void check_picture_dir(const std::string& dir) {
 // Writes the hierarchy `output` and its pictures, all or nothing: the hierarchy goes to a temporary name
 // beside its target, the pictures to a staging folder inside `dir` (StagedFolder), then the pictures are
 // moved into place and the hierarchy renamed last. A failure on the way leaves `output` and the folder as
-// they were, an earlier run's files included (removing what this run wrote had deleted them).
+// they were, an earlier run's files included (removing what this run wrote had deleted them). Two renames
+// cannot be one step: should the hierarchy's own rename fail after the pictures are in place (a target made
+// read-only in between; a folder there is refused up front), the new pictures stay beside the old file.
 void write_hierarchy_and_pictures(const std::string& output, const Mt& mt, const std::string& dir,
                                   const std::vector<Picture>& pictures) {
   if (dir.empty()) {

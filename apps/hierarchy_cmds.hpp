@@ -40,7 +40,7 @@ struct PmBuildArgs {
   std::string input, output;
   std::string cost = "quadric";   ///< quadric | quadric-plain | lindstrom-turk
   std::size_t faces = 0, vertices = 0;  ///< stop targets (0: none; neither: the smallest base mesh)
-  float max_error = -1.0f;        ///< stop before a collapse whose error exceeds this (object units; < 0: none)
+  float max_error = -1.0f;        ///< skip the collapses whose node error would exceed this (object units; < 0: none)
   double lt_finish = 4.0;         ///< QemOptions::lt_finish (quadric costs; 0: off)
   bool lt_finish_given = false;   ///< --lt-finish on the command line (refused where it cannot apply)
   bool colors = false;            ///< GH98 colour quadrics when the mesh has vertex colours

@@ -1,6 +1,8 @@
 #include "multitri/huge_pages.hpp"
 
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <new>
 
 // Sanitizers see through operator new only: under ASan (gcc: __SANITIZE_ADDRESS__; clang: __has_feature)
@@ -55,12 +57,27 @@ void huge_deallocate(void* p, std::size_t bytes) noexcept { ::operator delete(p,
 #endif
 
 double physical_memory_bytes() noexcept {
+  double bytes = 0.0;
 #if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-  return pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
-#else
-  return 0.0;
+  if (pages > 0 && page > 0) bytes = double(pages) * double(page);
 #endif
+#if defined(__linux__)
+  // A container's memory limit (cgroup v2, then v1) is what the out-of-memory killer enforces; sysconf does
+  // not see it. "max" (v2) or a huge number (v1) means no limit.
+  for (const char* path : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::FILE* f = std::fopen(path, "r");
+    if (!f) continue;
+    char text[64] = {};
+    const bool read = std::fgets(text, sizeof text, f) != nullptr;
+    std::fclose(f);
+    char* end = nullptr;
+    const double limit = read ? std::strtod(text, &end) : 0.0;
+    if (read && end != text && limit > 0.0 && limit < 1e18 && (bytes == 0.0 || limit < bytes)) bytes = limit;
+    break;
+  }
+#endif
+  return bytes;
 }
 
 }  // namespace varmesh

@@ -27,6 +27,7 @@
 #include <glm/geometric.hpp>
 
 #include "multitri/errors.hpp"
+#include "multitri/mesh_distance.hpp"
 #include "pm/qem_heap.hpp"
 #include "pm/read_ahead.hpp"
 #include "pm/quadric.hpp"
@@ -125,6 +126,14 @@ class LtConstraints {
   double b_[3] = {0, 0, 0};
   int n_ = 0;
 };
+
+// Distance from q to the segment [s0, s1].
+double segment_distance(const glm::dvec3& q, const glm::dvec3& s0, const glm::dvec3& s1) noexcept {
+  const glm::dvec3 d = s1 - s0;
+  const double dd = glm::dot(d, d);
+  const double t = dd > 0.0 ? std::clamp(glm::dot(q - s0, d) / dd, 0.0, 1.0) : 0.0;
+  return glm::length(q - (s0 + t * d));
+}
 
 // Costs and legality are recomputed only where they can change. A candidate's cost depends only on its two
 // ends' quadrics and positions, so a candidate edge stays valid until one of its ends dies: then it is
@@ -290,6 +299,7 @@ class Analysis {
   std::vector<Index> ring_;  // scratch
   std::vector<EdgeRef> new_edges_;
   std::vector<glm::dvec3> new_normal_;  // scratch of check() for collapse()
+  std::vector<Index> new_fan_;          // scratch of check(): the faces of a and b that stay
   std::vector<std::uint8_t> stale_;     // per edge, Lindstrom-Turk only: costed before its neighbourhood changed
 
   VertexHierarchyBuilder::Raw raw_;
@@ -535,6 +545,7 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
   // - Hoppe's fn0..fn3, the faces across (b, vl), (vl, a), (a, vr), (vr, b): each holds a or b.
   new_normal_.clear();
   bool apexes[2] = {false, false}, flipped = false;
+  new_fan_.clear();
   for (int side = 0; side < 2; ++side) {
     const Index v = side == 0 ? a : b;
     for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
@@ -557,6 +568,7 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
       if (f == fl || f == fr || flipped) continue;
       const glm::dvec3& n0 = fnormal_[f];
       const glm::dvec3 n1 = face_normal(f, v, p);
+      new_fan_.push_back(f);
       new_normal_.push_back(n1);
       const double l1 = glm::dot(n1, n1);
       if (n0 == glm::dvec3(0.0)) {
@@ -568,6 +580,23 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
   }
   if (apexes[0] && apexes[1]) return Verdict::kLink;
   if (flipped) return Verdict::kFlip;
+  // The other way round: how far a and b themselves end up from the new fan around vs (the planes above
+  // see vs move, not the old vertices left behind; closed meshes gave up to 3x E in pm query --measure
+  // without this). The nearest new face is searched until one is within the error found so far.
+  for (Index v : {a, b}) {
+    const double bar = st.local * st.local;
+    double best = std::numeric_limits<double>::infinity();
+    for (Index f : new_fan_) {
+      glm::dvec3 q[3];
+      for (int k = 0; k < 3; ++k) {
+        const Index w = cur_[3 * f + k];
+        q[k] = w == a || w == b ? p : geo_[w].p;
+      }
+      best = std::min(best, point_triangle_distance_sq(geo_[v].p, q[0], q[1], q[2]));
+      if (best <= bar) break;
+    }
+    if (std::isfinite(best)) st.local = std::max(st.local, std::sqrt(best));
+  }
   if (border_[a] || border_[b]) st.local = std::max(st.local, border_deviation(a, b, p));
   return Verdict::kOk;
 }
@@ -604,12 +633,6 @@ double Analysis::border_deviation(Index a, Index b, const glm::dvec3& p) const {
       }
     }
   }
-  auto segment_distance = [](const glm::dvec3& q, const glm::dvec3& s0, const glm::dvec3& s1) {
-    const glm::dvec3 d = s1 - s0;
-    const double dd = glm::dot(d, d);
-    const double t = dd > 0.0 ? std::clamp(glm::dot(q - s0, d) / dd, 0.0, 1.0) : 0.0;
-    return glm::length(q - (s0 + t * d));
-  };
   double worst = 0.0;
   if (n_new > 0)
     for (Index v : {a, b}) {
@@ -996,7 +1019,8 @@ void Analysis::init_leaf_bounds() {
         if (lo > 2e-6f) cone = {axis, lo - 1e-6f};
       }
     }
-    raw_.bounds[v] = ElementBound{pv, static_cast<float>(std::sqrt(r2)), 0.0f, cone};
+    // Rounded up: a radius rounded down to float can miss its farthest corner (in subnormal steps at 1e-40).
+    raw_.bounds[v] = ElementBound{pv, std::nextafter(static_cast<float>(std::sqrt(r2)), std::numeric_limits<float>::infinity()), 0.0f, cone};
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -80,11 +81,13 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
       bad("repair report: " + std::to_string(r.added_vertex_copies) + " vertex copies, but " + std::to_string(nl - distinct) +
           " leaves share a source");
   }
-  // Slack for the float rounding of the enclosing spheres (relative to the sphere's size and place).
+  // Slack for the float rounding of the enclosing spheres: relative to the sphere's size and place, plus a few
+  // of the smallest subnormal floats (coordinates near 1e-40 are rounded in absolute steps of that size).
   // In double: the float squared distance overflows past ~1.8e19.
   auto outside = [](const glm::vec3& p, const ElementBound& b) {
     const double scale = std::max({std::abs(b.center.x), std::abs(b.center.y), std::abs(b.center.z), b.radius});
-    return glm::length(glm::dvec3(p) - glm::dvec3(b.center)) > double(b.radius) + 1e-5 * scale;
+    const double ulp = double(std::numeric_limits<float>::denorm_min());
+    return glm::length(glm::dvec3(p) - glm::dvec3(b.center)) > double(b.radius) + 1e-5 * scale + 4.0 * ulp;
   };
   for (std::size_t v = 0; v < nn; ++v) {
     const glm::vec3& p = raw.positions[v];

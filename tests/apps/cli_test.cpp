@@ -268,6 +268,8 @@ TEST(Cli, BuildRefusesOptionsThatDoNotApply) {
       {"build " + mesh + " -o " + vrm + " --up 0,1,0", "--up requires --pictures"},
       {"build " + mesh + " -o " + vrm + " --view 0,1,0", "--view requires --pictures"},
       {"build " + mesh + " -o " + vrm + " --levels -1", "--levels"},
+      {"build saddle --method adaptive -o " + vrm + " --levels 0", "--levels must be in 1..48"},
+      {"build saddle --method adaptive -o " + vrm + " --levels 49", "--levels must be in 1..48"},
       {"build " + mesh + " -o " + vrm + " --levels 40", "would exceed 2^31 faces"},
       {"build " + bad_mesh + " -o " + vrm, bad_mesh + ": FourKMesh: face 4"},
       {"build " + bad_mesh + " --method simplify4k -o " + vrm, bad_mesh + ": simplify4k: face"},

@@ -164,6 +164,7 @@ TEST(PmCli, BadInputIsNamed) {
       {"pm query " + b.vmh.string() + " --error nan -o " + out, "--error must be"},
       {"pm query " + b.vmh.string() + " --error inf -o " + out, "--error: must be a finite number"},
       {"pm query " + b.vmh.string() + " --camera 0,0,3,0,0,0,40 --viewport inf -o " + out, "--viewport: must be a finite number"},
+      {"pm query " + b.vmh.string() + " --camera 0,0,3,0,0,0,40 --pixels 1e39 -o " + out, "--pixels: must be a finite number"},  // inf as a float
       {"pm query " + b.mesh.string() + " --error 1 -o " + out, b.mesh.string()},
   };
   for (const Case& c : cases) {

@@ -626,6 +626,20 @@ TEST(QemAnalysis, HugeModelsAreSimplifiedLikeSmallOnes) {
   }
 }
 
+// And tiny ones: coordinates near 1e-40 are subnormal floats, a leaf's radius rounded down to float missed its
+// farthest corner by more than the loader's relative slack, and pm build refused its own output (helper-54).
+TEST(QemAnalysis, TinyModelsBuildAndLoad) {
+  const TriMesh unit = testing::make_icosphere(3);
+  for (const float scale : {1e-30f, 1e-38f, 1e-40f, 1e-42f, 1e-44f}) {
+    TriMesh m = unit;
+    for (glm::vec3& p : m.positions) p *= scale;
+    QemStats st;
+    const VertexHierarchy h = build_vertex_hierarchy(m, {}, &st);  // finish() checks every leaf's sphere
+    h.validate();
+    EXPECT_EQ(h.num_leaves(), m.num_vertices()) << "scale " << scale;
+  }
+}
+
 // The depth limit ignored the bits the tree ids need: with max_depth 62 a chain of collapses and a few
 // separate triangles made a tree whose keys needed 68 bits, and finish() refused the whole hierarchy.
 TEST(QemAnalysis, DepthLeavesRoomForTheTreeIds) {
