@@ -56,9 +56,10 @@ void boundary_and_interior(const std::vector<Index>& corners, std::span<const Fa
 }
 
 glm::vec3 face_normal(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
-  const glm::vec3 n = glm::cross(b - a, c - a);
-  const float len = glm::length(n);
-  return len > 0.0f ? n / len : glm::vec3(0.0f);
+  // In double: in float the cross product of edges past ~1.8e19 overflows and the normal became NaN.
+  const glm::dvec3 n = glm::cross(glm::dvec3(b) - glm::dvec3(a), glm::dvec3(c) - glm::dvec3(a));
+  const double len = glm::length(n);
+  return len > 0.0 && std::isfinite(len) ? glm::vec3(n / len) : glm::vec3(0.0f);
 }
 
 // Cone of the given unit normals around their mean direction (full cone if they span a hemisphere).
@@ -66,7 +67,7 @@ NormalCone normal_cone(const std::vector<glm::vec3>& normals) {
   glm::vec3 mean(0.0f);
   for (const auto& n : normals) mean += n;
   const float len = glm::length(mean);
-  if (len < 1e-12f) return {};
+  if (!(len >= 1e-12f) || !std::isfinite(len)) return {};  // also NaN: a full cone, never a NaN axis
   mean /= len;
   float c = 1.0f;
   for (const auto& n : normals)
@@ -521,7 +522,8 @@ double angle_between(const glm::vec3& a, const glm::vec3& b) {
 // Half-angle code for at least `angle` radians (with slack for float decoding), or the full-cone code.
 std::uint32_t cone_angle_code(double angle) {
   const double code = std::ceil((angle + 1e-5) / kConeUnit);
-  return code > 254.0 ? Mt::kFullConeCode : static_cast<std::uint32_t>(std::max(code, 0.0));
+  if (!(code <= 254.0)) return Mt::kFullConeCode;  // NaN too: the cast below would be undefined
+  return static_cast<std::uint32_t>(std::max(code, 0.0));
 }
 
 }  // namespace
@@ -575,7 +577,9 @@ void Mt::pack_bounds(const std::vector<ElementBound>& bounds, bool nest) {
     }
     p.r = frame_.encode_radius(b.radius + dist(frame_.center(p.c), b.center));
     p.error = b.error;
-    if (b.cone.is_full()) {
+    const bool finite_cone = std::isfinite(b.cone.axis.x) && std::isfinite(b.cone.axis.y) && std::isfinite(b.cone.axis.z) &&
+                             std::isfinite(b.cone.cos_half_angle) && glm::dot(b.cone.axis, b.cone.axis) > 0.0f;
+    if (b.cone.is_full() || !finite_cone) {
       p.cone = kFullConeCode << 24;
     } else {
       const std::uint32_t axis = encode_octahedral(b.cone.axis);

@@ -252,6 +252,13 @@ std::vector<Index> read_indices(ByteReader& in, std::uint64_t count) {
 
 std::vector<std::uint8_t> encode_vertex_hierarchy(const VertexHierarchy& h) {
   if (h.num_leaves() == 0) throw InvalidInput("encode_vertex_hierarchy: the hierarchy is empty (never built)");
+  // The reader takes colours in [0, 1] only (the mesh writers need them so); the analysis keeps a node's
+  // colour within its input's range, so only an input with colours outside [0, 1] gets here.
+  for (std::size_t v = 0; v < h.colors().size(); ++v) {
+    const glm::vec3& col = h.colors()[v];
+    if (!(glm::all(glm::greaterThanEqual(col, glm::vec3(0.0f))) && glm::all(glm::lessThanEqual(col, glm::vec3(1.0f)))))
+      throw InvalidInput("encode_vertex_hierarchy: the colour of node " + std::to_string(v) + " is outside [0, 1]", v);
+  }
   const auto& records = HierarchyFileAccess::records(h);
   const auto& bounds = HierarchyFileAccess::bounds(h);
   const auto& ring_offsets = HierarchyFileAccess::ring_offsets(h);
@@ -278,7 +285,7 @@ std::vector<std::uint8_t> encode_vertex_hierarchy(const VertexHierarchy& h) {
   out.u64(c.ring_items);
   for (const glm::vec3& p : h.positions()) out.vec3(p);
   if (c.colors)
-    for (const glm::vec3& col : h.colors()) out.vec3(col);
+    for (const glm::vec3& col : h.colors()) out.vec3(col);  // in [0, 1]: checked before anything is written
   for (const CollapseRecord& r : records) {
     for (Index x : {r.vt, r.vu, r.vl_hat, r.vr_hat, r.fl_hat, r.fr_hat}) out.u32(x);
     for (Index x : r.fn) out.u32(x);
@@ -318,7 +325,15 @@ VertexHierarchy decode_vertex_hierarchy(std::span<const std::uint8_t> bytes, con
   for (std::size_t v = 0; v < raw.positions.size(); ++v) raw.positions[v] = in.finite_vec3("the position of node", v);
   if (c.colors) {
     raw.colors.resize(static_cast<std::size_t>(nodes));
-    for (std::size_t v = 0; v < raw.colors.size(); ++v) raw.colors[v] = in.finite_vec3("the colour of node", v);
+    for (std::size_t v = 0; v < raw.colors.size(); ++v) {
+      const std::uint64_t at = in.offset();
+      const glm::vec3 col = in.finite_vec3("the colour of node", v);
+      // In [0, 1], as the mesh writers need: pm query failed only when writing its result, without naming
+      // this file (helper-55).
+      if (!(glm::all(glm::greaterThanEqual(col, glm::vec3(0.0f))) && glm::all(glm::lessThanEqual(col, glm::vec3(1.0f)))))
+        in.fail("the colour of node " + std::to_string(v) + " is outside [0, 1]", at);
+      raw.colors[v] = col;
+    }
   }
   raw.records.resize(static_cast<std::size_t>(c.collapses));
   for (CollapseRecord& r : raw.records) {

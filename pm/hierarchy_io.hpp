@@ -55,8 +55,9 @@ namespace varmesh {
 /// Current format version written by encode_vertex_hierarchy; the reader accepts exactly this version.
 inline constexpr std::uint32_t kVertexHierarchyFormatVersion = 1;
 
-/// The file image of `h` in the layout above. Throws InvalidInput for a hierarchy that was never built
-/// (no leaf: a default-constructed VertexHierarchy), which could not be read back. O(size of h).
+/// The file image of `h` in the layout above. Throws InvalidInput for a hierarchy that could not be read
+/// back: never built (no leaf: a default-constructed VertexHierarchy), or with a colour outside [0, 1] (from
+/// an input mesh with such colours). O(size of h).
 std::vector<std::uint8_t> encode_vertex_hierarchy(const VertexHierarchy& h);
 
 /// Rebuilds a hierarchy from a file image. `name_for_errors` is the file name IoError reports. Throws

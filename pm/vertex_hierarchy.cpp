@@ -63,9 +63,13 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
     if (raw.face_to_input[f] >= raw.repair.input_faces)
       bad("face " + std::to_string(f) + ": input face " + std::to_string(raw.face_to_input[f]) + " beyond the input's " +
           std::to_string(raw.repair.input_faces));
-  // The repair report adds up (an edited file could otherwise declare an input of 2^32 vertices, which
-  // the commands size their arrays by): every input vertex is some leaf's source or unreferenced, every
-  // input face kept or dropped as degenerate or duplicate, and every leaf beyond one per source is a copy.
+  // The repair report adds up: every input vertex is some leaf's source or unreferenced, every input face
+  // kept or dropped as degenerate or duplicate, and every leaf beyond one per source is a copy; and the input
+  // had 32-bit indices (a report raised by 2^63 on both sides of a sum would otherwise pass). Nothing is
+  // sized by these counts (input_mesh_of and leaves_of_inputs number densely); they are printed and compared.
+  if (raw.repair.input_vertices >= kInvalid || raw.repair.input_faces >= kInvalid || raw.repair.unreferenced_vertices >= kInvalid)
+    bad("repair report: an input of " + std::to_string(raw.repair.input_vertices) + " vertices and " +
+        std::to_string(raw.repair.input_faces) + " faces is beyond 32-bit indices");
   {
     std::vector<Index> sources(raw.leaf_to_input);
     std::sort(sources.begin(), sources.end());
@@ -309,6 +313,28 @@ void VertexHierarchy::validate() const {
     check_face(r.fr_hat, r.vr_hat, r.vu, r.vt);
   }
   check_collapses();
+  // Then the geometry and the maps, on a hierarchy whose topology is sound.
+  // A leaf's cone holds its faces' normals (the back-face and silhouette criteria trust the cones; the
+  // analysis builds them from these normals, with 1e-6 of slack in the cosine).
+  const std::size_t nf = faces_.size() / 3;
+  for (std::size_t f = 0; f < nf; ++f) {
+    const glm::dvec3 p0(positions_[faces_[3 * f]]), p1(positions_[faces_[3 * f + 1]]), p2(positions_[faces_[3 * f + 2]]);
+    const glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
+    const double len = glm::length(n);
+    if (!(len > 0.0) || !std::isfinite(len)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const NormalCone& c = bounds_[faces_[3 * f + k]].cone;
+      if (!c.is_full() && glm::dot(n / len, glm::dvec3(c.axis)) < double(c.cos_half_angle) - 1e-4)
+        fail("leaf " + std::to_string(faces_[3 * f + k]) + ": the normal of face " + std::to_string(f) + " is outside its normal cone");
+    }
+  }
+  // Locked leaves are never collapsed, and each input face has at most one face here.
+  for (std::size_t l = 0; l < locked_.size(); ++l)
+    if (locked_[l] && parent_[l] != kInvalid) fail("leaf " + std::to_string(l) + " is locked but collapsed by node " + std::to_string(parent_[l]));
+  std::vector<Index> sources(face_to_input_.begin(), face_to_input_.end());
+  std::sort(sources.begin(), sources.end());
+  if (const auto dup = std::adjacent_find(sources.begin(), sources.end()); dup != sources.end())
+    fail("input face " + std::to_string(*dup) + " is the source of two faces");
 }
 
 void VertexHierarchy::check_collapses() const {

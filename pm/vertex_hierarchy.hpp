@@ -27,8 +27,10 @@
 /// the ancestors of vl^ and vr^; the link condition holds (their only common neighbours are those corners,
 /// an interior edge does not join two border vertices, an apex keeps a face, no tetrahedron); fn0..fn3 are
 /// the faces across (vu, vl), (vl, vt), (vt, vr), (vr, vu); the stored ring is the set of vs's neighbours
-/// afterwards; and the faces left at the end are the base mesh. Up to geometry, a hierarchy that passes is
-/// one the analysis could have built, which is what SrMesh's three schemes rely on.
+/// afterwards; and the faces left at the end are the base mesh. Then each leaf's cone holds its faces'
+/// normals (up to 1e-4 in the cosine), locked leaves are never collapsed, and no two faces come from one
+/// input face. Up to geometry, a hierarchy that passes is one the analysis could have built, which is what
+/// SrMesh's three schemes rely on.
 #include <array>
 #include <bit>
 #include <cstddef>

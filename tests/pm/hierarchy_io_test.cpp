@@ -544,6 +544,46 @@ void rejected(Bytes b, const std::string& reason) {
   EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
 }
 
+// Colours and locks of an edited file (helper-55): a colour outside [0, 1] loaded and made pm query fail
+// when writing its result, without naming the hierarchy; a locked leaf could be collapsed, a flag be 2.
+TEST(HierarchyIo, ColoursAndLocksAreChecked) {
+  const Encoded fixture = encoded(build_locked_colored(4));
+  const auto& [h, good, at] = fixture;
+  ASSERT_TRUE(h.has_colors());
+  ASSERT_NE(at.locked, at.repair);  // the lock flags are stored
+  auto refused = [](Bytes b, const std::string& reason) {  // by the reader itself, at a byte offset
+    reseal(b);
+    const IoError e = decode_error(b, nullptr, "edit.vmh");
+    EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
+    EXPECT_TRUE(contains(e.what(), "edit.vmh (byte ")) << e.what();
+  };
+  {
+    Bytes b = good;
+    put_le(b, at.colors + 12 * 7, std::bit_cast<std::uint32_t>(1e10f), 4);
+    refused(b, "the colour of node 7 is outside [0, 1]");
+  }
+  {
+    Bytes b = good;
+    put_le(b, at.colors + 12 * 3 + 8, std::bit_cast<std::uint32_t>(-0.5f), 4);
+    refused(b, "the colour of node 3 is outside [0, 1]");
+  }
+  {
+    // An unlocked leaf that the analysis collapsed, marked locked.
+    Index leaf = 0;
+    while (leaf < h.num_leaves() && (h.is_locked(leaf) || h.parent(leaf) == kInvalid)) ++leaf;
+    ASSERT_LT(leaf, h.num_leaves());
+    Bytes b = good;
+    put_le(b, at.locked + leaf, 1, 1);
+    rejected(b, "is locked but collapsed");
+  }
+  // And the writer refuses a colour the reader would refuse (a library caller's input with colours past 1).
+  TriMesh bright = colored(make_grid(4, 4));
+  bright.colors[5] = {1.5f, 0.2f, 0.2f};
+  QemOptions opt;
+  opt.use_colors = true;
+  EXPECT_THROW(encode_vertex_hierarchy(build_vertex_hierarchy(bright, opt)), InvalidInput);
+}
+
 // Records that are each well-formed but do not fit the hierarchy they sit in: the schemes used to loop
 // forever (Hoppe's forced splits on a neighbour face created by the node itself, Xia-Varshney on a stored
 // ring naming a node that is not there), read out of bounds (two equal cut vertices) or build a wrong mesh
@@ -600,6 +640,30 @@ TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
     Bytes b = good;  // one input face more than kept + dropped
     put_le(b, at.repair + 8, h.repair_report().input_faces + 1, 8);
     rejected(b, "repair report");
+  }
+  {
+    // A report raised by 2^63 on both sides of its sum added up (helper-55); the input had 32-bit indices.
+    Bytes b = good;
+    put_le(b, at.repair, h.repair_report().input_vertices + (std::uint64_t{1} << 63), 8);
+    put_le(b, at.repair + 16, h.repair_report().unreferenced_vertices + (std::uint64_t{1} << 63), 8);
+    rejected(b, "beyond 32-bit indices");
+  }
+  {
+    // Two faces from one input face (helper-55).
+    Bytes b = good;
+    put_le(b, at.face_to_input + 4, get_le(b, at.face_to_input, 4), 4);
+    rejected(b, "is the source of two faces");
+  }
+  {
+    // Every normal cone turned round: nesting still holds, but back-face culling answered for the other side
+    // (helper-55: 954 triangles instead of 910 for a camera query). A leaf's cone must hold its faces' normals.
+    Bytes b = good;
+    for (std::size_t v = 0; v < h.num_nodes(); ++v)
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t axis = at.bounds + 36 * v + 20 + 4 * static_cast<std::size_t>(k);
+        put_le(b, axis, get_le(b, axis, 4) ^ 0x80000000u, 4);  // the sign bit
+      }
+    rejected(b, "is outside its normal cone");
   }
   {
     // A leaf moved to x = 3e38 with its bounds unchanged: the view criteria would test spheres it is not in.
