@@ -11,18 +11,12 @@
 
 #include "multitri/errors.hpp"
 #include "multitri/mesh_report.hpp"
+#include "mesh_fixtures.hpp"
 
 namespace varmesh {
 namespace {
 
-double signed_volume(const TriMesh& m) {
-  double v = 0.0;
-  for (std::size_t f = 0; f < m.num_faces(); ++f) {
-    const glm::dvec3 a(m.positions[m.indices[3 * f]]), b(m.positions[m.indices[3 * f + 1]]), c(m.positions[m.indices[3 * f + 2]]);
-    v += glm::dot(a, glm::cross(b, c)) / 6.0;
-  }
-  return v;
-}
+using testing::signed_volume;
 
 TEST(Shapes, IcosphereIsAClosedOutwardSphere) {
   for (int levels : {0, 1, 3}) {

@@ -17,6 +17,7 @@
 #include "multitri/mesh_report.hpp"
 #include "pm/manifold_input.hpp"
 #include "distance_oracle.hpp"
+#include "mesh_fixtures.hpp"
 #include "pm_fixtures.hpp"
 #include "test_support.hpp"
 
@@ -56,16 +57,6 @@ std::vector<Config> configs() {
           {"quadric, plain placement", plain},
           {"Lindstrom-Turk", with_cost(CollapseCost::kLindstromTurk)},
           {"quadric to 12 faces, Lindstrom-Turk finish", finish}};
-}
-
-// Signed volume enclosed by a closed mesh.
-double volume_of(const TriMesh& m) {
-  double v = 0.0;
-  for (std::size_t f = 0; f < m.num_faces(); ++f) {
-    const glm::dvec3 a(m.positions[m.indices[3 * f]]), b(m.positions[m.indices[3 * f + 1]]), c(m.positions[m.indices[3 * f + 2]]);
-    v += glm::dot(a, glm::cross(b, c)) / 6.0;
-  }
-  return v;
 }
 
 TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
@@ -248,11 +239,11 @@ double expect_volume_kept(const TriMesh& m, const QemOptions& options) {
   o.target_vertices = 40;
   const VertexHierarchy h = build_vertex_hierarchy(m, o);
   h.validate();
-  const double v0 = volume_of(m);
+  const double v0 = testing::signed_volume(m);
   EXPECT_GT(h.num_collapses(), 100u);
   for (std::size_t k = 0; k <= h.num_collapses(); k += std::max<std::size_t>(1, h.num_collapses() / 9))
-    EXPECT_NEAR(volume_of(mesh_after_collapses(h, k)), v0, 1e-5 * std::abs(v0)) << "after " << k;
-  const double base = volume_of(mesh_after_collapses(h, h.num_collapses()));
+    EXPECT_NEAR(testing::signed_volume(mesh_after_collapses(h, k)), v0, 1e-5 * std::abs(v0)) << "after " << k;
+  const double base = testing::signed_volume(mesh_after_collapses(h, h.num_collapses()));
   EXPECT_NEAR(base, v0, 1e-5 * std::abs(v0));
   return base;
 }
@@ -267,13 +258,13 @@ TEST(QemAnalysis, LindstromTurkPreservesVolume) {
 // minimiser (all of them on these smooth closed meshes); the plain quadric minimiser shrinks them.
 TEST(QemAnalysis, QuadricPlacementKeepsTheVolume) {
   for (const TriMesh& m : {make_icosphere(3), make_torus(20, 12)}) {
-    const double v0 = volume_of(m);
+    const double v0 = testing::signed_volume(m);
     const double kept = expect_volume_kept(m, QemOptions{});
     QemOptions o;
     o.target_vertices = 40;
     o.preserve_volume = false;
     const VertexHierarchy plain = build_vertex_hierarchy(m, o);
-    const double shrunk = volume_of(mesh_after_collapses(plain, plain.num_collapses()));
+    const double shrunk = testing::signed_volume(mesh_after_collapses(plain, plain.num_collapses()));
     EXPECT_GT(std::abs(shrunk - v0), 100.0 * std::abs(kept - v0)) << "plain " << shrunk << ", kept " << kept << ", input " << v0;
   }
 }
