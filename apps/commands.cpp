@@ -164,6 +164,9 @@ void write_staged(const std::string& target, const std::function<void(const std:
   } catch (const IoError& e) {
     fs::remove(staged, ec);
     throw IoError(target, e.reason());  // the user's name, not the staging one
+  } catch (...) {
+    fs::remove(staged, ec);
+    throw;
   }
   try {
     then_();
