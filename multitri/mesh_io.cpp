@@ -34,8 +34,7 @@ void validate_for_writing(const TriMesh& mesh) {
     if (!std::isfinite(mesh.texcoords[v].x) || !std::isfinite(mesh.texcoords[v].y))
       throw InvalidInput("vertex texcoord is not finite", v);
   for (std::size_t v = 0; v < mesh.colors.size(); ++v) {
-    const glm::vec3& c = mesh.colors[v];
-    if (!(c.x >= 0.0f && c.x <= 1.0f && c.y >= 0.0f && c.y <= 1.0f && c.z >= 0.0f && c.z <= 1.0f))
+    if (!is_unit_color(mesh.colors[v]))
       throw InvalidInput("vertex colour is outside [0, 1]", v);
   }
 }

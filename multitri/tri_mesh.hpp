@@ -30,6 +30,12 @@ struct Box3 {
   float diagonal() const noexcept;
 };
 
+/// Whether every component of an RGB colour lies in [0, 1] (false for NaN): what the mesh writers, the readers
+/// and the hierarchy files take.
+inline bool is_unit_color(const glm::vec3& c) noexcept {
+  return c.x >= 0.0f && c.x <= 1.0f && c.y >= 0.0f && c.y <= 1.0f && c.z >= 0.0f && c.z <= 1.0f;
+}
+
 struct TriMesh {
   std::vector<glm::vec3> positions;
   std::vector<Index> indices;  ///< 3 per face

@@ -256,7 +256,7 @@ std::vector<std::uint8_t> encode_vertex_hierarchy(const VertexHierarchy& h) {
   // colour within its input's range, so only an input with colours outside [0, 1] gets here.
   for (std::size_t v = 0; v < h.colors().size(); ++v) {
     const glm::vec3& col = h.colors()[v];
-    if (!(glm::all(glm::greaterThanEqual(col, glm::vec3(0.0f))) && glm::all(glm::lessThanEqual(col, glm::vec3(1.0f)))))
+    if (!is_unit_color(col))
       throw InvalidInput("encode_vertex_hierarchy: the colour of node " + std::to_string(v) + " is outside [0, 1]", v);
   }
   const auto& records = HierarchyFileAccess::records(h);
@@ -330,7 +330,7 @@ VertexHierarchy decode_vertex_hierarchy(std::span<const std::uint8_t> bytes, con
       const glm::vec3 col = in.finite_vec3("the colour of node", v);
       // In [0, 1], as the mesh writers need: pm query failed only when writing its result, without naming
       // this file (helper-55).
-      if (!(glm::all(glm::greaterThanEqual(col, glm::vec3(0.0f))) && glm::all(glm::lessThanEqual(col, glm::vec3(1.0f)))))
+      if (!is_unit_color(col))
         in.fail("the colour of node " + std::to_string(v) + " is outside [0, 1]", at);
       raw.colors[v] = col;
     }
