@@ -249,21 +249,11 @@ std::string format_obj(const TriMesh& mesh) {
   out.reserve(mesh.num_vertices() * 40 + mesh.num_faces() * 24 + 64);
   out += "# varmesh\n";
   for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
-    const glm::vec3& p = mesh.positions[v];
     out += "v ";
-    append_float(out, p.x);
-    out += ' ';
-    append_float(out, p.y);
-    out += ' ';
-    append_float(out, p.z);
+    append_vec3(out, mesh.positions[v]);
     if (mesh.has_colors()) {
-      const glm::vec3& c = mesh.colors[v];
       out += ' ';
-      append_float(out, c.x);
-      out += ' ';
-      append_float(out, c.y);
-      out += ' ';
-      append_float(out, c.z);
+      append_vec3(out, mesh.colors[v]);
     }
     out += '\n';
   }
@@ -276,11 +266,7 @@ std::string format_obj(const TriMesh& mesh) {
   }
   for (const glm::vec3& n : mesh.normals) {
     out += "vn ";
-    append_float(out, n.x);
-    out += ' ';
-    append_float(out, n.y);
-    out += ' ';
-    append_float(out, n.z);
+    append_vec3(out, n);
     out += '\n';
   }
   // Attributes are per vertex, so a corner uses the same number for v, vt and vn.
