@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -59,6 +60,10 @@ void apply_raw_size(const std::string& text, const std::string& path, HeightFiel
 /// bounding sphere downstream would be infinite. read_mesh() itself keeps such files (it round-trips any
 /// finite float); the commands that compute geometry read through this.
 TriMesh read_input_mesh(const std::string& path, ReadInfo* info = nullptr);
+
+/// The same, for a file's contents already in memory (a member of an archive); `name` gives the format and
+/// names the file in errors.
+TriMesh read_input_mesh_data(const std::string& name, std::string_view data);
 
 /// Writes `mesh` to `mesh_path` and `picture` (when not null) to `png_path`, both or neither: the mesh is
 /// staged under a temporary name and moved into place after the picture is written, so a failed run leaves

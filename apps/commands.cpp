@@ -141,14 +141,23 @@ void apply_raw_size(const std::string& text, const std::string& path, HeightFiel
   options.raw_height = static_cast<std::size_t>(wh[1]);
 }
 
-TriMesh read_input_mesh(const std::string& path, ReadInfo* info) {
-  TriMesh mesh = read_mesh(path, info);
+namespace {
+
+TriMesh checked_extent(TriMesh mesh, const std::string& path) {
   Box3 box;
   for (Index i : mesh.indices) box.add(mesh.positions[i]);
   if (!std::isfinite(box.diagonal()))
     throw IoError(path, "the coordinates span more than about 1.8e19: squared distances overflow float (the "
                         "bounding box's diagonal cannot be measured); scale the model down");
   return mesh;
+}
+
+}  // namespace
+
+TriMesh read_input_mesh(const std::string& path, ReadInfo* info) { return checked_extent(read_mesh(path, info), path); }
+
+TriMesh read_input_mesh_data(const std::string& name, std::string_view data) {
+  return checked_extent(read_mesh_data(name, data), name);
 }
 
 void write_staged(const std::string& target, const std::function<void(const std::string& staged)>& write,

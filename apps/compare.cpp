@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <unordered_map>
@@ -31,6 +32,7 @@
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
+#include "multitri/tar_archive.hpp"
 #include "multitri/terrain_gen.hpp"
 #include "pm/dual_pieces.hpp"
 #include "pm/qem_analysis.hpp"
@@ -270,6 +272,8 @@ TriMesh make_bumpy_icosphere(int levels) {
 
 // ---- options ----
 
+constexpr const char* kPackagedMeshes = "/usr/share/doc/libcgal-dev/data.tar.gz";
+
 struct Options {
   fs::path out;
   // Files are written into a staging folder inside `out` and moved into `out` when the whole run has
@@ -279,6 +283,9 @@ struct Options {
   fs::path data;
   bool data_present = false;
   std::string data_note;
+  // Debian libcgal-demo's archive of sample data, which holds a cow and a bunny: the models' stand-ins when
+  // the data folder lacks them ($VARMESH_PACKAGED_MESHES overrides the path; tests point it elsewhere).
+  fs::path packaged;
   std::string image;
   double feature_fraction = 0.05;
   std::size_t grid = 128;
@@ -339,8 +346,10 @@ Options parse_options(const CompareArgs& a) {
     o.data = (env && *env) ? fs::path(env) : fs::path("../shared/data");
     o.data_present = fs::is_directory(o.data);
     if (!o.data_present)
-      o.data_note = "data folder " + o.data.string() + " not found (set --data or VARMESH_DATA): generated inputs are used";
+      o.data_note = "data folder " + o.data.string() + " not found (set --data or VARMESH_DATA): packaged or generated inputs are used";
   }
+  const char* packaged = std::getenv("VARMESH_PACKAGED_MESHES");
+  o.packaged = (packaged && *packaged) ? fs::path(packaged) : fs::path(kPackagedMeshes);
   return o;
 }
 
@@ -452,6 +461,20 @@ struct ModelSpec {
   glm::vec3 overview_dir;  // from the centre towards the camera of the pictures (need not be unit)
 };
 
+// The packaged stand-in of a model (Debian libcgal-demo: data/meshes/cow.off, the same cow as the data
+// folder's; data/meshes/bunny00.off, a closed 37.7k-vertex bunny in the Stanford bunny's axes), or nothing
+// when the archive is not installed or has no such model. A corrupt archive is an error, not a fallback.
+std::optional<TriMesh> packaged_model(const Options& o, const std::string& name, std::string& source) {
+  const char* member = name == "cow" ? "data/meshes/cow.off" : name == "bunny" ? "data/meshes/bunny00.off" : nullptr;
+  std::error_code ec;
+  if (member == nullptr || !fs::is_regular_file(o.packaged, ec)) return std::nullopt;
+  std::optional<std::string> data = read_tar_member(o.packaged.string(), member, std::uint64_t{64} << 20);
+  if (!data) return std::nullopt;
+  TriMesh mesh = read_input_mesh_data(o.packaged.string() + ":" + member, *data);
+  source = fs::path(member).filename().string() + " (libcgal-demo)";
+  return mesh;
+}
+
 CaseInput model_case(const Options& o, const std::string& name) {
   ModelSpec spec{};
   // Frusta on the head of each model (Figure 10a: a close-up of the bunny's face); the pictures look from
@@ -467,7 +490,11 @@ CaseInput model_case(const Options& o, const std::string& name) {
   c.type = "3D";
   c.criteria = "V.F. & B.F.C.";
   const std::string file = data_file(o, o.quick ? spec.quick_file : spec.file);
-  if (file.empty()) {
+  std::optional<TriMesh> packaged;
+  if (file.empty()) packaged = packaged_model(o, name, c.source);
+  if (packaged) {
+    c.mesh = std::move(*packaged);
+  } else if (file.empty()) {
     spec.up = {0, 0, 1};
     if (name == "cow") {
       c.mesh = o.quick ? varmesh::make_torus(32, 16, 1.0f, 0.35f, 0.15f) : varmesh::make_torus(120, 60, 1.0f, 0.35f, 0.15f);

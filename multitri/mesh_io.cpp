@@ -49,8 +49,12 @@ MeshFormat mesh_format_from_path(const std::string& path) {
 }
 
 TriMesh read_mesh(const std::string& path, ReadInfo* info) {
+  mesh_format_from_path(path);  // an unknown extension is refused before the file is read
+  return read_mesh_data(path, read_file(path), info);
+}
+
+TriMesh read_mesh_data(const std::string& path, std::string_view data, ReadInfo* info) {
   const MeshFormat format = mesh_format_from_path(path);
-  const std::string data = read_file(path);
   ReadInfo local;
   TriMesh mesh;
   switch (format) {

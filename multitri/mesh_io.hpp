@@ -29,6 +29,7 @@
 ///   and properties are skipped (their sizes are honoured, lists included).
 #include <cstddef>
 #include <string>
+#include <string_view>
 
 #include "multitri/tri_mesh.hpp"
 
@@ -48,6 +49,10 @@ MeshFormat mesh_format_from_path(const std::string& path);
 
 /// Reads a mesh; throws IoError as described above. `info` (optional) receives repair counts.
 TriMesh read_mesh(const std::string& path, ReadInfo* info = nullptr);
+
+/// Reads a mesh from a file's contents already in memory (a member of an archive, say): `name` gives the
+/// format by its extension and names the file in errors. Otherwise as read_mesh.
+TriMesh read_mesh_data(const std::string& name, std::string_view data, ReadInfo* info = nullptr);
 
 struct WriteOptions {
   bool binary = true;  ///< PLY only: binary little endian (true) or ascii (false)

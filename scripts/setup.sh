@@ -21,16 +21,25 @@ done
 packages=(cmake g++ make libeigen3-dev libglm-dev libosd-dev libgtest-dev libgmock-dev libbenchmark-dev
           libpng-dev libcli11-dev zlib1g-dev)
 [ $bench -eq 1 ] && packages+=(libmeshoptimizer-dev libopenmesh-dev libcgal-dev)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing ${missing[*]}" >&2
+# Sample models: `varmesh compare` takes the cow and the bunny from this package's data.tar.gz when
+# ../shared/data is absent. Installed without its recommends (a Qt development stack).
+packages_no_recommends=(libcgal-demo)
+missing_in() {
+  local p
+  for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || echo "$p"
+  done
+}
+mapfile -t missing < <(missing_in "${packages[@]}")
+mapfile -t missing_nr < <(missing_in "${packages_no_recommends[@]}")
+if [ ${#missing[@]} -gt 0 ] || [ ${#missing_nr[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]} ${missing_nr[*]}" >&2
   SUDO=""
   [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+  [ ${#missing[@]} -eq 0 ] || DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+  [ ${#missing_nr[@]} -eq 0 ] ||
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing_nr[@]}" >/dev/null
 fi
 
 [ $build -eq 1 ] || exit 0
