@@ -55,6 +55,11 @@ TriMesh read_mesh(const std::string& path, ReadInfo* info) {
 
 TriMesh read_mesh_data(const std::string& path, std::string_view data, ReadInfo* info) {
   const MeshFormat format = mesh_format_from_path(path);
+  // Editors on Windows start UTF-8 text with a byte-order mark; in front of the first statement of an OBJ
+  // or the OFF keyword it would hide them. (PLY's magic must be the first bytes, and its binary bodies
+  // are reported by byte offset, so a PLY with a mark stays an error.)
+  constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
+  if (format != MeshFormat::kPly && data.substr(0, kUtf8Bom.size()) == kUtf8Bom) data.remove_prefix(kUtf8Bom.size());
   ReadInfo local;
   TriMesh mesh;
   switch (format) {

@@ -6,7 +6,7 @@
 /// NaN/Inf coordinates, counts larger than the file can hold (checked before anything is allocated),
 /// unsupported properties or formats, meshes with no face ("no faces (empty mesh)"). Polygons are
 /// fan-triangulated: corners (c0, c1, c2, ..., ck) give (c0, c(i-1), c(i)) for i = 2..k. The result passes
-/// TriMesh::validate(). Writers write to a temporary file in the same folder and rename it over the
+/// TriMesh::validate(). A UTF-8 byte-order mark at the start of an OBJ or OFF file is skipped. Writers write to a temporary file in the same folder and rename it over the
 /// target, so a failed write leaves no partial file.
 ///
 /// Supported:

@@ -462,6 +462,25 @@ TEST(MeshIoObj, ColoursWeightsForwardReferencesAndCrLf) {
   EXPECT_EQ(w.indices, (std::vector<Index>{0, 1, 2}));
 }
 
+TEST(MeshIoText, Utf8ByteOrderMarkIsSkippedInObjAndOffOnly) {
+  const fs::path dir = testing::scratch_dir("mesh_io_bom");
+  const std::string bom = "\xEF\xBB\xBF";
+  write_text(dir / "b.obj", bom + "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const TriMesh obj = read_mesh((dir / "b.obj").string());
+  EXPECT_EQ(obj.num_vertices(), 3u);  // the first v was hidden behind the mark before
+  EXPECT_EQ(obj.positions[0], glm::vec3(0.0f));
+  write_text(dir / "b.off", bom + "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(read_mesh((dir / "b.off").string()).num_faces(), 1u);
+  // PLY's magic must be the file's first bytes.
+  write_text(dir / "b.ply", bom + "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                              "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                              "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_THROW(read_mesh((dir / "b.ply").string()), IoError);
+  // A mark anywhere else is not skipped.
+  write_text(dir / "m.obj", "v 0 0 0\n" + bom + "v 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_THROW(read_mesh((dir / "m.obj").string()), IoError);
+}
+
 TEST(MeshIoOff, VariantsColoursNormalsAndComments) {
   const fs::path dir = testing::scratch_dir("mesh_io_off_variants");
   write_text(dir / "c.off",
