@@ -358,30 +358,55 @@ void check_camera(const Camera& cam) {
                        ", z_far " + std::to_string(cam.z_far));
   if (!finite3(cam.eye) || !finite3(cam.target) || !finite3(cam.up))
     throw InvalidInput("render: camera eye, target or up is not finite");
-  const glm::vec3 fwd = cam.target - cam.eye;
-  const float lf = glm::length(fwd), lu = glm::length(cam.up);
-  if (!(lf > 0.0f)) throw InvalidInput("render: camera eye equals target");
-  if (!(glm::length(glm::cross(fwd, cam.up)) > 1e-6f * lf * lu))
+  // In double: the squared lengths of a camera framing a model of 1e-20 units underflow float.
+  const glm::dvec3 fwd = glm::dvec3(cam.target) - glm::dvec3(cam.eye), up(cam.up);
+  const double lf = glm::length(fwd), lu = glm::length(up);
+  if (!(lf > 0.0)) throw InvalidInput("render: camera eye equals target");
+  if (!(glm::length(glm::cross(fwd, up)) > 1e-6 * lf * lu))
     throw InvalidInput("render: camera up is zero or parallel to the view direction");
 }
 
 }  // namespace
 
-Image render_mesh(const TriMesh& mesh, const Camera& camera, const RenderOptions& options,
-                  const std::vector<Segment3>& overlay) {
+Image render_mesh(const TriMesh& input, const Camera& camera, const RenderOptions& options,
+                  const std::vector<Segment3>& input_overlay) {
   if (options.width <= 0 || options.width > kMaxSize || options.height <= 0 || options.height > kMaxSize)
     throw InvalidInput("render: image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
                        " is not within 1.." + std::to_string(kMaxSize));
   if (options.supersample != 1 && options.supersample != 2)
     throw InvalidInput("render: supersample must be 1 or 2, got " + std::to_string(options.supersample));
-  if (options.face_colors && options.face_colors->size() != mesh.num_faces())
+  if (options.face_colors && options.face_colors->size() != input.num_faces())
     throw InvalidInput("render: " + std::to_string(options.face_colors->size()) + " face colours for " +
-                       std::to_string(mesh.num_faces()) + " faces");
-  mesh.validate();
+                       std::to_string(input.num_faces()) + " faces");
+  input.validate();
+  Camera checked = camera;
+  checked.aspect = static_cast<float>(options.width) / static_cast<float>(options.height);
+  check_camera(checked);
 
-  Camera cam = camera;
-  cam.aspect = static_cast<float>(options.width) / static_cast<float>(options.height);
-  check_camera(cam);
+  // A picture does not change when the whole scene is moved and scaled alike, so it is drawn in the frame
+  // where the camera's target is the origin and its eye is at distance 1 (mapped in double). Squared
+  // lengths in the view, clipping and shading maths then stay in float's range for models of any size
+  // (a model of 1e-20 units underflowed them and drew nothing), and models far from the origin lose no
+  // precision to their offset.
+  const glm::dvec3 origin(camera.target);
+  const double scale = 1.0 / glm::length(glm::dvec3(camera.eye) - origin);
+  auto to_frame = [&](const glm::vec3& p) { return glm::vec3((glm::dvec3(p) - origin) * scale); };
+  TriMesh mesh = input;
+  for (glm::vec3& p : mesh.positions) p = to_frame(p);
+  std::vector<Segment3> overlay = input_overlay;
+  for (Segment3& seg : overlay) {
+    seg.a = to_frame(seg.a);
+    seg.b = to_frame(seg.b);
+  }
+  Camera cam = checked;
+  cam.eye = to_frame(camera.eye);
+  cam.target = glm::vec3(0.0f);
+  cam.z_near = static_cast<float>(camera.z_near * scale);
+  cam.z_far = static_cast<float>(camera.z_far * scale);
+  if (!(cam.z_near > 0.0f) || !(cam.z_far > cam.z_near) || !std::isfinite(cam.z_far))
+    throw InvalidInput("render: camera z_near " + std::to_string(camera.z_near) + ", z_far " +
+                       std::to_string(camera.z_far) + " are out of proportion to the eye's distance " +
+                       std::to_string(1.0 / scale));
   const glm::mat4 clip_from_world = cam.projection() * cam.view();
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
@@ -439,11 +464,14 @@ Image render_mesh(const TriMesh& mesh, const Camera& camera, const RenderOptions
     const Index i[3] = {mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)};
     if (view_code[i[0]] & view_code[i[1]] & view_code[i[2]]) continue;
     const glm::vec3& p0 = mesh.positions[i[0]];
-    const glm::vec3 fn = glm::cross(mesh.positions[i[1]] - p0, mesh.positions[i[2]] - p0);
+    // In double: the side test is cubic in the model's size and would underflow float for models of 1e-13
+    // and less (every face skipped, a blank picture).
+    const glm::dvec3 d0(p0);
+    const glm::dvec3 fn = glm::cross(glm::dvec3(mesh.positions[i[1]]) - d0, glm::dvec3(mesh.positions[i[2]]) - d0);
     // Counter-clockwise seen from the eye = the eye on the side the face normal points to.
-    const float side = glm::dot(fn, eye - p0);
-    if (!(side != 0.0f)) continue;  // edge-on or degenerate: no area on screen
-    const bool front = side > 0.0f;
+    const double side = glm::dot(fn, glm::dvec3(eye) - d0);
+    if (!(side != 0.0)) continue;  // edge-on or degenerate: no area on screen
+    const bool front = side > 0.0;
     if (!front && !options.two_sided) continue;
     if (options.wireframe) drawn.push_back(static_cast<FaceId>(f));
     const unsigned planes = guard_code[i[0]] | guard_code[i[1]] | guard_code[i[2]];
@@ -457,7 +485,8 @@ Image render_mesh(const TriMesh& mesh, const Camera& camera, const RenderOptions
       for (int k = 0; k < 3; ++k) c[k] *= shade[i[k]];
     } else {
       const glm::vec3 centroid = (p0 + mesh.positions[i[1]] + mesh.positions[i[2]]) / 3.0f;
-      const float s = kAmbient + (1.0f - kAmbient) * std::abs(glm::dot(safe_normalize(fn), safe_normalize(eye - centroid)));
+      const glm::vec3 unit_fn(glm::normalize(fn));  // fn != 0 (side != 0)
+      const float s = kAmbient + (1.0f - kAmbient) * std::abs(glm::dot(unit_fn, safe_normalize(eye - centroid)));
       for (auto& ck : c) ck *= s;
     }
     if (!front)
@@ -531,12 +560,12 @@ Camera default_camera_for(const TriMesh& mesh, float aspect) {
   bool flat = false;
   if (!box.empty()) {
     center = box.center();
-    float r2 = 0.0f;
+    double r2 = 0.0;  // double: squared distances of a model of 1e-20 units underflow float
     for (Index i : mesh.indices) {
-      const glm::vec3 d = mesh.positions[i] - center;
+      const glm::dvec3 d = glm::dvec3(mesh.positions[i]) - glm::dvec3(center);
       r2 = std::max(r2, glm::dot(d, d));
     }
-    radius = std::sqrt(r2);
+    radius = static_cast<float>(std::sqrt(r2));
     if (!(radius > 0.0f)) radius = 1.0f;
     const glm::vec3 ext = box.extent();
     flat = ext.z < 0.25f * std::max(ext.x, ext.y);

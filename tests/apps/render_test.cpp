@@ -621,6 +621,31 @@ TEST(RenderCamera, DefaultCameraFramesTheMeshFromAbove) {
   EXPECT_THROW(default_camera_for(terrain, 0.0f), InvalidInput);
 }
 
+// The picture of a model does not depend on its units: the same sphere scaled by 1e-30 ... 1e15 and moved
+// far from the origin, framed by default_camera_for and by picture_camera_for, covers the same pixels (to
+// a few along the silhouette, from float rounding). At 1e-20 the face side test used to underflow and the
+// picture came out blank.
+TEST(RenderCamera, PicturesDoNotDependOnTheModelsScale) {
+  const TriMesh unit = uv_sphere({0.0f, 0.0f, 0.0f}, 1.0f, 12, 24);
+  for (const bool picture_camera : {false, true}) {
+    std::size_t reference = 0;
+    for (const double scale : {1.0, 1e-30, 1e-20, 1e-12, 1e-5, 1e5, 1e15}) {
+      SCOPED_TRACE(std::to_string(scale) + (picture_camera ? " picture camera" : " default camera"));
+      TriMesh m = unit;
+      for (glm::vec3& p : m.positions) p = glm::vec3((glm::dvec3(p) + glm::dvec3(3.0, -2.0, 1.0)) * scale);
+      const Camera cam = picture_camera ? picture_camera_for(m, {0, 0, 1}, {1, -2, 1}, float(kW) / float(kH))
+                                        : default_camera_for(m, float(kW) / float(kH));
+      const std::size_t covered = count_non_black(render_mesh(m, cam, black_background()));
+      if (scale == 1.0) {
+        reference = covered;
+        EXPECT_GT(covered, std::size_t{kW * kH / 20});
+      } else {
+        EXPECT_NEAR(static_cast<double>(covered), static_cast<double>(reference), 0.01 * static_cast<double>(reference));
+      }
+    }
+  }
+}
+
 TEST(RenderRealMesh, BunnyRendersAndWritesAPng) {
   VARMESH_REQUIRE_SHARED(path, "meshes/bunny_npm_1839v.obj");
   const TriMesh bunny = read_mesh(path);
