@@ -1,15 +1,20 @@
-// `varmesh compare` as a user runs it: the quick run writes its table and pictures and exits 0, the ordering
-// line is printed per case, missing data falls back to generated inputs, and bad options fail with exit
-// code 1 and a one-line error.
+// `varmesh compare` as a user runs it: the quick run writes its table and pictures and exits 0, the printed
+// #V and #F follow the paper's ordering (ours <= Hoppe-97 <= Xia-Varshney) in every case, missing data falls
+// back to generated inputs, and bad options fail with exit code 1 and a one-line error.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
 
+#include <algorithm>
+#include <charconv>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "multitri/image.hpp"
 #include "apps/cli_support.hpp"
@@ -29,6 +34,90 @@ int count(const std::string& s, const std::string& what) {
   int n = 0;
   for (std::size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
   return n;
+}
+
+// #V and #F of one scheme in one case.
+struct Counts {
+  long vertices = -1, faces = -1;
+};
+
+std::string trim(const std::string& s) {
+  const std::size_t a = s.find_first_not_of(' '), b = s.find_last_not_of(' ');
+  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+// The table `varmesh compare` prints (print_table in apps/compare.cpp): a label of 16 columns, then one
+// " |" cell per case. The "model" row names the cases ("<case> <type>"), the "scheme" row the three columns
+// of each case (XV96, H97, ours, in any order), and the "#V" and "#F" rows hold the counts. Returns case ->
+// scheme -> counts; a malformed table is a test failure.
+std::map<std::string, std::map<std::string, Counts>> parse_counts(const std::string& out) {
+  std::map<std::string, std::vector<std::vector<std::string>>> rows;  // label -> cells -> words
+  std::istringstream lines(out);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.find(" |") == std::string::npos) continue;
+    std::vector<std::string> parts;
+    std::size_t from = 0;
+    for (std::size_t bar; (bar = line.find(" |", from)) != std::string::npos; from = bar + 2) parts.push_back(line.substr(from, bar - from));
+    parts.push_back(line.substr(from));
+    std::vector<std::vector<std::string>> cells;
+    for (std::size_t k = 1; k < parts.size(); ++k) {
+      std::istringstream words(parts[k]);
+      std::vector<std::string> w;
+      for (std::string x; words >> x;) w.push_back(x);
+      cells.push_back(w);
+    }
+    rows[trim(parts[0])] = cells;
+  }
+  std::map<std::string, std::map<std::string, Counts>> table;
+  for (const char* label : {"model", "scheme", "#V", "#F"})
+    if (rows.count(label) == 0) {
+      ADD_FAILURE() << "no row '" << label << "' in\n" << out;
+      return table;
+    }
+  const auto &models = rows["model"], &schemes = rows["scheme"], &vs = rows["#V"], &fs = rows["#F"];
+  if (schemes.size() != models.size() || vs.size() != models.size() || fs.size() != models.size()) {
+    ADD_FAILURE() << "rows of different lengths in\n" << out;
+    return table;
+  }
+  auto number = [&](const std::string& s) {
+    long v = -1;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || end != s.data() + s.size()) ADD_FAILURE() << "not a count: '" << s << "'";
+    return v;
+  };
+  for (std::size_t c = 0; c < models.size(); ++c) {
+    if (models[c].empty() || schemes[c].size() != 3 || vs[c].size() != 3 || fs[c].size() != 3) {
+      ADD_FAILURE() << "case column " << c << " is not three cells in\n" << out;
+      continue;
+    }
+    for (std::size_t k = 0; k < 3; ++k) table[models[c][0]][schemes[c][k]] = {number(vs[c][k]), number(fs[c][k])};
+  }
+  return table;
+}
+
+// Kim-Lee 2001, Table 2: ours <= Hoppe-97 <= Xia-Varshney in #V and in #F, for each of `cases` (exactly the
+// cases of the table), read from the printed numbers; the run's own verdict line must agree.
+void expect_ordering(const std::string& out, const std::vector<std::string>& cases) {
+  const auto table = parse_counts(out);
+  std::vector<std::string> found;
+  for (const auto& [name, runs] : table) found.push_back(name);
+  std::vector<std::string> want = cases;
+  std::sort(want.begin(), want.end());
+  EXPECT_EQ(found, want) << out;
+  for (const auto& [name, runs] : table) {
+    SCOPED_TRACE(name);
+    ASSERT_EQ(runs.size(), 3u) << out;
+    ASSERT_TRUE(runs.count("ours") && runs.count("H97") && runs.count("XV96")) << out;
+    const Counts &ours = runs.at("ours"), &h97 = runs.at("H97"), &xv96 = runs.at("XV96");
+    EXPECT_GT(ours.vertices, 0);
+    EXPECT_GT(ours.faces, 0);
+    EXPECT_LE(ours.vertices, h97.vertices) << "#V: ours > Hoppe-97";
+    EXPECT_LE(h97.vertices, xv96.vertices) << "#V: Hoppe-97 > Xia-Varshney";
+    EXPECT_LE(ours.faces, h97.faces) << "#F: ours > Hoppe-97";
+    EXPECT_LE(h97.faces, xv96.faces) << "#F: Hoppe-97 > Xia-Varshney";
+    EXPECT_NE(out.find(name + ": kim-lee <= hoppe97 <= xia-varshney in #V and #F: holds\n"), std::string::npos) << out;
+  }
 }
 
 // Generated inputs only (an empty data folder), all five cases, small panels: fast under sanitizers.
@@ -51,6 +140,7 @@ TEST(Compare, QuickRunOnGeneratedInputsWritesTableAndPictures) {
   }
   EXPECT_EQ(read_png((out / "image_features.png").string()).width, 2u * 96u);
   EXPECT_EQ(count(r.out, "generated"), 5) << r.out;
+  expect_ordering(r.out, {"image", "terrain", "bunny", "cow", "dragon"});
   // The table: every row of Table 2, one column per case and scheme.
   for (const char* row : {"#V", "#F", "#DC", "forced vsplits", "forced ecols", "time ms"})
     EXPECT_NE(r.out.find(std::string("\n") + row + " "), std::string::npos) << row;
@@ -105,6 +195,7 @@ TEST(Compare, OtherCostsRunEveryCase) {
       EXPECT_NE(r.out.find(std::string(name) + ": kim-lee <= hoppe97 <= xia-varshney in #V and #F: "), std::string::npos)
           << name << "\n" << r.out;
     EXPECT_EQ(r.out.find("INVALID"), std::string::npos) << r.out;
+    expect_ordering(r.out, {"image", "terrain", "bunny", "cow", "dragon"});
     const std::string csv = slurp(out / "table.csv");
     std::istringstream lines(csv);
     std::string line;
@@ -139,9 +230,24 @@ TEST(Compare, SharedDataQuickRun) {
   EXPECT_NE(r.out.find("cow_cgal_2904v.off"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("peppers_256_gray.png"), std::string::npos) << r.out;
   EXPECT_EQ(count(r.out, "generated"), 0) << r.out;
-  EXPECT_NE(r.out.find("cow: kim-lee <= hoppe97 <= xia-varshney in #V and #F: holds"), std::string::npos) << r.out;
+  expect_ordering(r.out, {"image", "cow"});
   EXPECT_TRUE(fs::exists(out / "cow_schemes.png"));
   EXPECT_FALSE(fs::exists(out / "terrain_schemes.png"));
+}
+
+// Every case of the quick run on the data folder's inputs (the image, the Fuji terrain, the bunny, the cow
+// and the dirty dragon res4): the paper's ordering in each.
+TEST(Compare, SharedDataQuickRunEveryCase) {
+  VARMESH_REQUIRE_SHARED(cow, "meshes/cow_cgal_2904v.off");
+  const fs::path dir = testing::scratch_dir("compare_shared_all");
+  const fs::path out = dir / "out";
+  const CmdResult r = run("--quick --quiet --panel 64 --size 16 --out " + out.string() + " --data " + testing::shared_data(""), dir);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_EQ(count(r.out, "generated"), 0) << r.out;
+  for (const char* file : {"peppers_256_gray.png", "fuji_elevation_512_f32le.raw", "bunny_libigl_3485v.off", "cow_cgal_2904v.off",
+                           "dragon_vrip_res4_5205v.ply"})
+    EXPECT_NE(r.out.find(file), std::string::npos) << file << "\n" << r.out;
+  expect_ordering(r.out, {"image", "terrain", "bunny", "cow", "dragon"});
 }
 
 TEST(Compare, BadOptionsFailWithOneLineAndExitCode1) {
