@@ -185,6 +185,8 @@ TEST(Compare, OtherCostsRunEveryCase) {
     const fs::path empty = dir / "no_data";
     fs::create_directories(empty);
     const fs::path out = dir / "out";
+    // Generated stand-ins only (the packaged 75k-face bunny would dominate the sanitizer run).
+    const testing::EnvGuard no_package("VARMESH_PACKAGED_MESHES", (dir / "not_installed.tar.gz").string());
     const CmdResult r = run("--quick --quiet --panel 64 --size 16 --cost " + cost + " --out " + out.string() +
                                 " --data " + empty.string(),
                             dir);
