@@ -49,11 +49,41 @@ void require_png(const std::string& path, const char* command, const char* optio
 /// passes both: the commands reject it themselves, naming the option.
 std::string check_non_negative(const std::string& text);
 std::string check_positive(const std::string& text);
+/// Validator of counts (--budget, --faces): "" when `text` is an integer >= 0 that fits 64 bits, else a
+/// message ("must be an integer >= 0, not -1"; CLI11's NonNegativeNumber printed DBL_MAX in 309 digits).
+std::string check_count(const std::string& text);
+/// Validators of string options whose empty value would read as "not given": "" unless `text` is empty
+/// ("empty file name" for files and folders, "empty value" for the rest).
+std::string check_file_name(const std::string& text);
+std::string check_not_empty(const std::string& text);
 
-/// `--raw-size W,H` (two positive integers) of the height field `path` into `options`; nothing when `text` is
-/// empty. Throws InvalidInput naming the option when it is malformed, or given for a file that is not a raw
-/// height field (.raw, .f32, any case), where it would be ignored.
+/// `--raw-size W,H` (two integers in 1..2^28) of the height field `path` into `options`. Throws InvalidInput
+/// naming the option when it is malformed or out of range, given for a file that is not a raw height field
+/// (.raw, .f32, any case; it would be ignored), or missing (`text` empty) for one that is.
 void apply_raw_size(const std::string& text, const std::string& path, HeightFieldReadOptions& options);
+
+/// read_heightfield(path, options) with the samples `spacing` apart, and the checks that name the user's file
+/// or option rather than an internal function: Terrain-RGB decoding of a file that is not a PNG, a z_scale
+/// (--z-scale) that makes a sample infinite, and coordinates that span more than about 1.8e19 (the limit of
+/// read_input_mesh: the bounding box's diagonal overflows float, and the tool could not read its own output),
+/// blamed on the file's heights, on --z-scale (options.z_scale != 1) or on --spacing (spacing != 1).
+/// Throws IoError naming the file, or InvalidInput naming the option.
+HeightField read_checked_heightfield(const std::string& path, const HeightFieldReadOptions& options, float spacing = 1.0f);
+
+/// Output checks made before any work. check_output_file: resolve_output_path (multitri/file_util.hpp): a
+/// folder, FIFO, device or socket at `path` is refused with IoError naming it. refuse_same_file: InvalidInput
+/// when writing `output` would replace the input `input`: the same file by std::filesystem::equivalent when
+/// both exist (links and hard links included), else the same normalized absolute path; the message names both
+/// (`output_what` and `input_what` say which options they are, e.g. "--png", "the input").
+void check_output_file(const std::string& path);
+void refuse_same_file(const std::string& input, const std::string& input_what, const std::string& output,
+                      const std::string& output_what);
+/// True when `inner` is `outer` or lies inside the folder `outer` (normalized absolute paths, links in the
+/// existing part resolved).
+bool path_within(const std::string& inner, const std::string& outer);
+
+/// The pictures' --up and --view, checked before any work: three numbers each, --view not zero.
+void check_picture_axes(const std::string& up, const std::string& view);
 
 /// read_mesh(), and an IoError naming the file when the coordinates span more than float can measure (the
 /// bounding box's diagonal overflows, e.g. coordinates near +-3.4e38): every edge length, normal and
@@ -72,11 +102,12 @@ void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, c
                             const Image* picture);
 
 /// Writes the file `target` and what goes with it, all or nothing: write(staged) writes the file under a
-/// temporary name beside `target` (same folder, so the rename stays within one file system; same extension,
-/// since writers pick the format by it; hidden, with the pid), then then_() writes the rest (pictures), then
-/// the file is renamed into place. `target` naming a folder is refused before anything is written. On any
-/// failure the staged file is removed and `target` is left as it was (an existing file included); an
-/// IoError of write() is rethrown naming `target`, not the staging name.
+/// temporary name beside the file replaced (resolve_output_path: a symbolic link's target, so the link stays;
+/// same folder, so the rename stays within one file system; the extension of `target`, since writers pick
+/// the format by it; hidden, with the pid), then then_() writes the rest (pictures), then the file is
+/// renamed into place. `target` naming a folder, FIFO, device or socket is refused before anything is
+/// written. On any failure the staged file is removed and `target` is left as it was (an existing file
+/// included); an IoError of write() is rethrown naming `target`, not the staging name.
 void write_staged(const std::string& target, const std::function<void(const std::string& staged)>& write,
                   const std::function<void()>& then_);
 
@@ -84,9 +115,12 @@ void write_staged(const std::string& target, const std::function<void(const std:
 /// per object) and are moved into the folder by commit(). Without commit() - an exception on the way - the
 /// destructor removes the staging folder and the folders this object created (the output folder and
 /// missing parents), so the folder is left as it was, files of earlier runs included. commit() first checks
-/// that no target is a folder; a rename that still fails (e.g. a target owned by another user in a sticky
-/// folder) throws with the files moved so far in place. Throws IoError naming the folder when it cannot be
-/// created.
+/// every target by the policy of resolve_output_path (a folder, FIFO, device or socket is refused; a
+/// symbolic link is written through, its target replaced) and copies the files bound for links beside their
+/// targets; a rename that still fails (e.g. a target owned by another user in a sticky folder) throws with
+/// the files moved so far in place. Throws IoError naming the folder when it cannot be created or exists as
+/// something else than a folder. check_targets() makes commit()'s checks before any work, for names known
+/// in advance.
 class StagedFolder {
  public:
   explicit StagedFolder(const std::string& folder);
@@ -96,6 +130,14 @@ class StagedFolder {
   /// Where to write `name` now; the name is remembered for commit().
   std::string path(const std::string& name);
   void commit();
+  /// Throws IoError when `folder` exists and is not a folder (or a link to one), or when one of `names` in
+  /// it could not be replaced by a file (see resolve_output_path). Creates nothing.
+  static void check_targets(const std::string& folder, const std::vector<std::string>& names);
+  /// The user's name for `path`: a path inside the staging folder of any StagedFolder of this process
+  /// (live or gone) is mapped to the same name in its output folder; any other path is returned as it is.
+  /// The command line's error handler maps the file of an IoError through it, so that a failed write names
+  /// the final path, not the staging one.
+  static std::string user_path(const std::string& path);
 
  private:
   std::string folder_, stage_;
@@ -113,7 +155,9 @@ class Stopwatch {
   std::chrono::steady_clock::time_point start_;
 };
 
-/// Announces a step on stderr and, when it took more than a second, how long it took.
+/// Announces a step on stderr and, when it took more than a second, how long it took. A step left by an
+/// exception is remembered (the innermost one): failed() names it, for the error handler ("out of memory
+/// while building the 4-8 hierarchy"); null when no step failed.
 class Step {
  public:
   Step(const char* what, bool quiet);
@@ -121,10 +165,12 @@ class Step {
   Step(const Step&) = delete;
   Step& operator=(const Step&) = delete;
   double ms() const { return watch_.ms(); }
+  static const char* failed();
 
  private:
   const char* what_;
   bool quiet_;
+  int exceptions_;  ///< std::uncaught_exceptions() at construction
   Stopwatch watch_;
 };
 

@@ -24,6 +24,7 @@
 #include "apps/subdiv_cmd.hpp"
 #include "fourk/grid48.hpp"
 #include "multitri/errors.hpp"
+#include "multitri/file_util.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
@@ -107,11 +108,13 @@ bool is_mesh_file(const std::string& path) {
 void require_mesh_output(const std::string& path, const char* command, const char* option) {
   if (!is_mesh_file(path))
     throw InvalidInput(std::string(command) + ": " + option + " must end in .obj, .ply or .off, not '" + path + "'");
+  check_output_file(path);
 }
 
 void require_png(const std::string& path, const char* command, const char* option) {
   if (!path.empty() && lower_extension(path) != ".png")
     throw InvalidInput(std::string(command) + ": " + option + " must end in .png, not '" + path + "'");
+  check_output_file(path);
 }
 
 namespace {
@@ -130,15 +133,139 @@ std::string check_sign(const std::string& text, bool zero_ok) {
 std::string check_non_negative(const std::string& text) { return check_sign(text, true); }
 std::string check_positive(const std::string& text) { return check_sign(text, false); }
 
+std::string check_count(const std::string& text) {
+  std::uint64_t v = 0;
+  const char* end = text.data() + text.size();
+  const auto [next, ec] = std::from_chars(text.data(), end, v);
+  if (ec == std::errc::result_out_of_range) return "must be an integer below 2^64, not " + text;
+  if (ec != std::errc() || next != end) return "must be an integer >= 0, not '" + text + "'";
+  return "";
+}
+
+std::string check_file_name(const std::string& text) { return text.empty() ? "empty file name" : ""; }
+std::string check_not_empty(const std::string& text) { return text.empty() ? "empty value" : ""; }
+
+namespace {
+
+// Each side of a raw height field: the reader's limit on the sample count (2^28) bounds both.
+constexpr std::uint64_t kMaxRawSide = std::uint64_t{1} << 28;
+
+// A positive integer of at most kMaxRawSide written in decimal digits only; 0 when it is not one.
+std::uint64_t parse_side(std::string_view text) {
+  std::uint64_t v = 0;
+  const auto [next, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec == std::errc::result_out_of_range) return kMaxRawSide + 1;
+  return ec == std::errc() && next == text.data() + text.size() ? v : 0;
+}
+
+std::string format_g(double v) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%g", v);
+  return s;
+}
+
+}  // namespace
+
 void apply_raw_size(const std::string& text, const std::string& path, HeightFieldReadOptions& options) {
-  if (text.empty()) return;
   const std::string ext = lower_extension(path);
-  if (ext != ".raw" && ext != ".f32") throw InvalidInput("--raw-size is for a .raw or .f32 height field, not '" + path + "'");
-  const auto wh = parse_floats(text, "--raw-size", 2);
-  if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]))
-    throw InvalidInput("--raw-size: expected two positive integers W,H");
-  options.raw_width = static_cast<std::size_t>(wh[0]);
-  options.raw_height = static_cast<std::size_t>(wh[1]);
+  const bool raw = ext == ".raw" || ext == ".f32";
+  if (text.empty()) {
+    if (raw) throw InvalidInput("'" + path + "' is a headerless float32 height field: give its size with --raw-size W,H");
+    return;
+  }
+  if (!raw) throw InvalidInput("--raw-size is for a .raw or .f32 height field, not '" + path + "'");
+  // Integers, not floats: a float holds 16777217 as 16777216, and casting 1e20 to size_t is undefined.
+  const std::size_t comma = text.find(',');
+  const std::string_view t(text);
+  const std::uint64_t w = comma == std::string::npos ? 0 : parse_side(t.substr(0, comma));
+  const std::uint64_t h = comma == std::string::npos ? 0 : parse_side(t.substr(comma + 1));
+  if (w == 0 || h == 0) throw InvalidInput("--raw-size: expected two positive integers W,H, not '" + text + "'");
+  if (w > kMaxRawSide || h > kMaxRawSide)
+    throw InvalidInput("--raw-size: W and H must be at most " + std::to_string(kMaxRawSide) + " (2^28 samples in all), not '" + text + "'");
+  options.raw_width = static_cast<std::size_t>(w);
+  options.raw_height = static_cast<std::size_t>(h);
+}
+
+HeightField read_checked_heightfield(const std::string& path, const HeightFieldReadOptions& options, float spacing) {
+  if (options.decoding == PixelDecoding::kTerrainRgb && lower_extension(path) != ".png")
+    throw InvalidInput("--terrain-rgb decodes PNG pictures only, not '" + path + "'");
+  if (!std::isfinite(options.z_scale)) throw InvalidInput("--z-scale must be a finite number");
+  if (!(spacing > 0.0f) || !std::isfinite(spacing)) throw InvalidInput("--spacing must be finite and > 0");
+  HeightField field;
+  try {
+    field = read_heightfield(path, options);
+  } catch (const InvalidInput&) {
+    // The options are checked above: what is left is a z_scale that overflows a sample (read_heightfield's
+    // contract).
+    throw InvalidInput("--z-scale " + format_g(options.z_scale) + " makes heights of '" + path +
+                       "' overflow float (more than 3.4e38)");
+  }
+  field.spacing_x = field.spacing_y = spacing;
+  // The mesh spans at most the field's box. Its diagonal must be measurable in float, as read_input_mesh
+  // demands of every mesh (with a margin for the rounding of positions): else the tool could not read back
+  // what it writes, and the builders fail on infinite radii.
+  const auto [lo, hi] = std::minmax_element(field.z.begin(), field.z.end());
+  const double dz = double(*hi) - double(*lo);
+  const double dx = double(field.width - 1) * double(spacing), dy = double(field.height - 1) * double(spacing);
+  const double limit = 0.999 * double(std::numeric_limits<float>::max());
+  auto too_big = [limit](double x, double y, double z) { return !(x * x + y * y + z * z <= limit); };
+  if (!too_big(dx, dy, dz)) return field;
+  const std::string tail = ", more than about 1.8e19: squared distances overflow float (the bounding box's diagonal "
+                           "cannot be measured, and varmesh could not read the mesh back)";
+  const std::string heights = "the heights span " + format_g(dz);
+  if (too_big(0.0, 0.0, dz)) {
+    if (options.z_scale == 1.0f) throw IoError(path, heights + tail + "; scale them down");
+    throw InvalidInput("--z-scale " + format_g(options.z_scale) + ": " + heights + " in '" + path + "'" + tail);
+  }
+  const std::string diagonal = "the terrain's bounding box is " + format_g(std::sqrt(dx * dx + dy * dy + dz * dz)) +
+                               " across (" + std::to_string(field.width) + " x " + std::to_string(field.height) +
+                               " samples " + format_g(spacing) + " apart";
+  if (too_big(dx, dy, 0.0)) throw InvalidInput("--spacing " + format_g(spacing) + ": " + diagonal + ")" + tail);
+  throw InvalidInput("--spacing " + format_g(spacing) +
+                     (options.z_scale != 1.0f ? " and --z-scale " + format_g(options.z_scale) : "") + ": " + diagonal +
+                     ", " + heights + " in '" + path + "')" + tail);
+}
+
+namespace {
+
+// The path compared when a file does not exist: absolute, normalized, links in its existing part resolved.
+std::filesystem::path comparable_path(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path abs = fs::absolute(path, ec);
+  if (ec) return fs::path(path).lexically_normal();
+  const fs::path canonical = fs::weakly_canonical(abs, ec);
+  return ec ? abs.lexically_normal() : canonical.lexically_normal();
+}
+
+}  // namespace
+
+void check_output_file(const std::string& path) {
+  if (!path.empty()) resolve_output_path(path);
+}
+
+void refuse_same_file(const std::string& input, const std::string& input_what, const std::string& output,
+                      const std::string& output_what) {
+  namespace fs = std::filesystem;
+  if (input.empty() || output.empty()) return;
+  std::error_code ec1, ec2, ec3;
+  const bool both = fs::exists(input, ec1) && fs::exists(output, ec2);
+  const bool same = both ? fs::equivalent(input, output, ec3) : comparable_path(input) == comparable_path(output);
+  if (same)
+    throw InvalidInput(output_what + " '" + output + "' is the same file as " + input_what + " '" + input +
+                       "': writing it would destroy the input; choose another name");
+}
+
+bool path_within(const std::string& inner, const std::string& outer) {
+  std::filesystem::path i = comparable_path(inner), o = comparable_path(outer);
+  if (i.filename().empty()) i = i.parent_path();  // a trailing separator
+  if (o.filename().empty()) o = o.parent_path();
+  return std::mismatch(i.begin(), i.end(), o.begin(), o.end()).second == o.end();
+}
+
+void check_picture_axes(const std::string& up, const std::string& view) {
+  if (!up.empty() && !(glm::length(parse_vec3(up, "--up")) > 0.0f)) throw InvalidInput("--up: the direction is zero");
+  if (!view.empty() && !(glm::length(parse_vec3(view, "--view")) > 0.0f)) throw InvalidInput("--view: the direction is zero");
 }
 
 namespace {
@@ -163,11 +290,12 @@ TriMesh read_input_mesh_data(const std::string& name, std::string_view data) {
 void write_staged(const std::string& target, const std::function<void(const std::string& staged)>& write,
                   const std::function<void()>& then_) {
   namespace fs = std::filesystem;
-  const fs::path t(target);
+  // Checked first: the rename at the end would fail (a folder) or replace a FIFO or device after the rest
+  // (the pictures) had been written. A symbolic link is written through: the file staged beside its target.
+  const fs::path t = resolve_output_path(target);
+  const fs::path staged = t.parent_path() / ("." + t.stem().string() + ".partial-" + std::to_string(::getpid()) +
+                                             fs::path(target).extension().string());
   std::error_code ec;
-  // Checked first: the rename at the end would fail after the rest (the pictures) had been written.
-  if (fs::is_directory(fs::symlink_status(t, ec))) throw IoError(target, "is a folder: the file cannot be put there");
-  const fs::path staged = t.parent_path() / ("." + t.stem().string() + ".partial-" + std::to_string(::getpid()) + t.extension().string());
   try {
     write(staged.string());
   } catch (const IoError& e) {
@@ -203,8 +331,31 @@ void write_mesh_and_picture(const std::string& mesh_path, const TriMesh& mesh, c
                [&] { write_png(png_path, *picture); });
 }
 
+namespace {
+
+// Every staging folder of this process and its output folder, for StagedFolder::user_path (kept after the
+// object is gone: the error handler runs once the stack has unwound).
+std::vector<std::pair<std::string, std::string>>& staging_folders() {
+  static std::vector<std::pair<std::string, std::string>> folders;
+  return folders;
+}
+
+}  // namespace
+
+void StagedFolder::check_targets(const std::string& folder, const std::vector<std::string>& names) {
+  namespace fs = std::filesystem;
+  if (folder.empty()) throw InvalidInput("the output folder's name is empty");
+  std::error_code ec;
+  const fs::file_status st = fs::status(folder, ec);  // a link to a folder is a folder
+  if (fs::exists(st) && !fs::is_directory(st)) throw IoError(folder, "exists and is not a folder: the files cannot be put in it");
+  if (!fs::exists(st) && fs::is_symlink(fs::symlink_status(folder, ec)))
+    throw IoError(folder, "is a symbolic link to nothing: make the folder it points to first");
+  for (const std::string& name : names) resolve_output_path((fs::path(folder) / name).string());
+}
+
 StagedFolder::StagedFolder(const std::string& folder) : folder_(folder) {
   namespace fs = std::filesystem;
+  check_targets(folder, {});
   std::error_code ec;
   // symlink_status: a dangling link is the user's, not a folder to make (or to take back).
   for (fs::path p = fs::absolute(folder).lexically_normal(); !p.empty(); p = p.parent_path()) {
@@ -228,6 +379,7 @@ StagedFolder::StagedFolder(const std::string& folder) : folder_(folder) {
     for (const std::string& p : made_) fs::remove(p, ec);
     throw IoError(folder, e.code().message());
   }
+  staging_folders().emplace_back(stage_, folder_);
 }
 
 StagedFolder::~StagedFolder() {
@@ -242,32 +394,84 @@ std::string StagedFolder::path(const std::string& name) {
   return (std::filesystem::path(stage_) / name).string();
 }
 
+std::string StagedFolder::user_path(const std::string& path) {
+  namespace fs = std::filesystem;
+  for (const auto& [stage, folder] : staging_folders()) {
+    const fs::path rel = fs::path(path).lexically_relative(stage);
+    if (rel.empty() || *rel.begin() == "..") continue;
+    return rel == "." ? folder : (fs::path(folder) / rel).string();
+  }
+  return path;
+}
+
 void StagedFolder::commit() {
   namespace fs = std::filesystem;
+  struct Move {
+    fs::path from, to;
+    std::string user;     // the user's name of the target
+    bool copied = false;  // `from` is a copy beside a link's target, to be removed unless moved
+  };
+  std::vector<Move> moves;
+  auto remove_copies = [&moves](std::size_t first) {
+    std::error_code ec;
+    for (std::size_t i = first; i < moves.size(); ++i)
+      if (moves[i].copied) fs::remove(moves[i].from, ec);
+  };
   // What would stop a move is looked for before the first move, so that nothing is moved when one cannot be.
-  for (const std::string& name : names_) {
-    std::error_code ec;
-    if (fs::is_directory(fs::symlink_status(fs::path(folder_) / name, ec)))
-      throw IoError((fs::path(folder_) / name).string(), "is a folder: the file cannot be put there");
+  try {
+    for (const std::string& name : names_) {
+      Move m{fs::path(stage_) / name, {}, (fs::path(folder_) / name).string()};
+      m.to = resolve_output_path(m.user);  // a folder, FIFO, device, socket: refused
+      if (m.to != fs::path(m.user)) {
+        // A symbolic link, written through. Its target may lie on another file system than the staging
+        // folder: the file is copied beside it first, and renamed onto it with the others.
+        const fs::path copy = m.to.parent_path() / ("." + m.to.filename().string() + ".partial-" +
+                                                    std::to_string(::getpid()) + "-" + std::to_string(moves.size()));
+        std::error_code ec;
+        fs::copy_file(m.from, copy, fs::copy_options::overwrite_existing, ec);
+        if (ec) {
+          const std::string why = ec.message();
+          fs::remove(copy, ec);
+          throw IoError(m.user, "cannot write beside the symbolic link's target " + m.to.string() + ": " + why);
+        }
+        m.from = copy;
+        m.copied = true;
+      }
+      moves.push_back(std::move(m));
+    }
+  } catch (...) {
+    remove_copies(0);
+    throw;
   }
-  for (const std::string& name : names_) {
+  for (std::size_t i = 0; i < moves.size(); ++i) {
     std::error_code ec;
-    fs::rename(fs::path(stage_) / name, fs::path(folder_) / name, ec);
-    if (ec) throw IoError((fs::path(folder_) / name).string(), "cannot move the written file into place: " + ec.message());
+    fs::rename(moves[i].from, moves[i].to, ec);
+    if (ec) {
+      remove_copies(i);
+      throw IoError(moves[i].user, "cannot move the written file into place: " + ec.message());
+    }
   }
   std::error_code ec;
-  fs::remove(stage_, ec);
+  fs::remove_all(stage_, ec);  // the files copied to links' targets are still in it
   committed_ = true;
 }
 
-Step::Step(const char* what, bool quiet) : what_(what), quiet_(quiet) {
+namespace {
+const char* failed_step = nullptr;
+}  // namespace
+
+Step::Step(const char* what, bool quiet) : what_(what), quiet_(quiet), exceptions_(std::uncaught_exceptions()) {
   if (!quiet_) std::fprintf(stderr, "[varmesh] %s ...\n", what_);
 }
 
 Step::~Step() {
+  // Unwinding: the innermost step is destroyed first and is the one named.
+  if (std::uncaught_exceptions() > exceptions_ && !failed_step) failed_step = what_;
   const double t = watch_.ms();
-  if (!quiet_ && t > 1000.0) std::fprintf(stderr, "[varmesh] %s done in %.1f s\n", what_, t / 1000.0);
+  if (!quiet_ && t > 1000.0 && !failed_step) std::fprintf(stderr, "[varmesh] %s done in %.1f s\n", what_, t / 1000.0);
 }
+
+const char* Step::failed() { return failed_step; }
 
 namespace {
 
@@ -303,14 +507,27 @@ int cmd_terrain(const TerrainArgs& a) {
   if (a.error < 0.0f && a.camera.empty()) throw InvalidInput("terrain: give --error E, --camera ..., or both");
   require_mesh_output(a.output, "terrain");
   require_png(a.png, "terrain");
+  refuse_same_file(a.input, "the input height field", a.output, "-o");
+  refuse_same_file(a.input, "the input height field", a.png, "--png");
   HeightFieldReadOptions ro;
   ro.decoding = a.terrain_rgb ? PixelDecoding::kTerrainRgb : PixelDecoding::kGray;
   if (!std::isfinite(a.z_scale)) throw InvalidInput("terrain: --z-scale must be a finite number");
   if (!(a.spacing > 0.0f) || !std::isfinite(a.spacing)) throw InvalidInput("terrain: --spacing must be finite and > 0");
   ro.z_scale = a.z_scale;
   apply_raw_size(a.raw_size, a.input, ro);
-  HeightField field = read_heightfield(a.input, ro);
-  field.spacing_x = field.spacing_y = a.spacing;
+  // The camera is checked before the work; its planes need the terrain's extent (below).
+  Camera cam;
+  if (!a.camera.empty()) {
+    const auto c = parse_floats(a.camera, "--camera", 7);
+    cam.eye = {c[0], c[1], c[2]};
+    cam.target = {c[3], c[4], c[5]};
+    cam.fov_y_deg = c[6];
+    if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
+    if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
+    if (!(a.pixels > 0.0f) || !std::isfinite(a.pixels) || !(a.viewport > 0.0f) || !std::isfinite(a.viewport))
+      throw InvalidInput("terrain: --pixels and --viewport must be finite and > 0");
+  }
+  const HeightField field = read_checked_heightfield(a.input, ro, a.spacing);
   Grid48Options go;
   go.exact_errors = !a.fast_bound;
   Stopwatch build_watch;
@@ -326,13 +543,6 @@ int cmd_terrain(const TerrainArgs& a) {
   Query q;
   std::vector<Criterion> parts;
   if (!a.camera.empty()) {
-    const auto c = parse_floats(a.camera, "--camera", 7);
-    Camera cam;
-    cam.eye = {c[0], c[1], c[2]};
-    cam.target = {c[3], c[4], c[5]};
-    cam.fov_y_deg = c[6];
-    if (!(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f)) throw InvalidInput("--camera: the field of view must be in (0, 180) degrees");
-    if (cam.eye == cam.target) throw InvalidInput("--camera: eye and target coincide");
     // Near and far planes from the terrain's own size (a fixed far plane of 1e7 made the answer depend on
     // the units: the same scene scaled by 1e5 lost triangles).
     const glm::vec3 lo(0.0f, 0.0f, *std::min_element(field.z.begin(), field.z.end()));
@@ -341,8 +551,6 @@ int cmd_terrain(const TerrainArgs& a) {
     const float reach = glm::length(cam.eye - 0.5f * (lo + hi)) + glm::length(hi - lo);
     cam.z_near = std::min(0.1f * a.spacing, 1e-3f * reach);
     cam.z_far = std::max(2.0f * reach, 10.0f * cam.z_near);
-    if (!(a.pixels > 0.0f) || !std::isfinite(a.pixels) || !(a.viewport > 0.0f) || !std::isfinite(a.viewport))
-      throw InvalidInput("terrain: --pixels and --viewport must be finite and > 0");
     parts.push_back(Criterion::outside_frustum(cam.frustum()));
     parts.push_back(Criterion::screen_error(cam, a.viewport, a.pixels));
   }
@@ -393,6 +601,7 @@ struct RenderArgs {
 int cmd_render(const RenderArgs& a) {
   if (a.output.empty()) throw InvalidInput("render: -o must end in .png");
   require_png(a.output, "render", "-o");
+  refuse_same_file(a.input, "the input mesh", a.output, "-o");
   const TriMesh mesh = read_input_mesh(a.input);
   const float aspect = float(a.width) / float(a.height);
   Camera cam = default_camera_for(mesh, aspect);
@@ -439,18 +648,18 @@ int run(int argc, char** argv) {
   auto* terrain = app.add_subcommand("terrain", "Build the 4-8 hierarchy of a height field and extract an adapted mesh");
   terrain->add_option("HEIGHTFIELD", ta.input, "height field: .pgm, .png, .raw/.f32 (float32 LE, give --raw-size)")->required();
   terrain->add_option("-o,--output", ta.output, "output mesh (.obj, .ply, .off)")->required();
-  terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample")->check(CLI::NonNegativeNumber);
-  auto* terrain_camera = terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)");
+  terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample")->check(check_non_negative);
+  auto* terrain_camera = terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)")->check(check_not_empty);
   terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(terrain_camera);
   terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(terrain_camera);
-  terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)")->check(CLI::NonNegativeNumber);
+  terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)")->check(check_count);
   terrain->add_option("--z-scale", ta.z_scale, "multiply heights by this factor");
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");
-  terrain->add_option("--raw-size", ta.raw_size, "W,H of a .raw/.f32 file");
+  terrain->add_option("--raw-size", ta.raw_size, "W,H of a .raw/.f32 file")->check(check_not_empty);
   terrain->add_flag("--terrain-rgb", ta.terrain_rgb, "decode a Mapbox Terrain-RGB PNG");
   terrain->add_flag("--fast-bound", ta.fast_bound, "looser O(1)-per-node error bounds instead of exact errors (more triangles for the same threshold)");
   terrain->add_flag("--measure", ta.measure, "measure the true max vertical error of the result over all samples");
-  terrain->add_option("--png", ta.png, "also render the result to this PNG");
+  terrain->add_option("--png", ta.png, "also render the result to this PNG")->check(check_file_name);
 
   RenderArgs ra;
   auto* render = app.add_subcommand("render", "Render a mesh to a PNG with a small software rasterizer");
@@ -458,8 +667,8 @@ int run(int argc, char** argv) {
   render->add_option("-o,--output", ra.output, "output .png")->required();
   render->add_option("--width", ra.width, "image width in pixels")->check(CLI::Range(1, 16384));
   render->add_option("--height", ra.height, "image height in pixels")->check(CLI::Range(1, 16384));
-  render->add_option("--eye", ra.eye, "camera position x,y,z (default: a 3/4 view)");
-  render->add_option("--target", ra.target, "camera target x,y,z (default: the bounding sphere centre)");
+  render->add_option("--eye", ra.eye, "camera position x,y,z (default: a 3/4 view)")->check(check_not_empty);
+  render->add_option("--target", ra.target, "camera target x,y,z (default: the bounding sphere centre)")->check(check_not_empty);
   render->add_option("--fov", ra.fov, "vertical field of view in degrees")->check(CLI::Range(1.0, 170.0));
   render->add_flag("--wireframe", ra.wireframe, "draw edges");
   render->add_flag("--flat", ra.flat, "flat shading");
@@ -467,12 +676,14 @@ int run(int argc, char** argv) {
 
   DemoArgs da;
   auto* demo = app.add_subcommand("demo", "Fractal terrain: build, uniform-error and view-dependent meshes, table, OBJ + PNG");
-  demo->add_option("--out", da.out_dir, "output folder (default varmesh_demo)");
-  demo->add_option("--size", da.size, "terrain size in samples per side (default 1025)")->check(CLI::Range(17, 8193));
+  demo->add_option("--out", da.out_dir, "output folder (default varmesh_demo)")->check(check_file_name);
+  auto* demo_size = demo->add_option("--size", da.size, "terrain size in samples per side of the generated terrain (default 1025)")->check(CLI::Range(17, 8193));
   demo->add_option("--error", da.error, "uniform mesh: max vertical error (default 0.5% of the height range)")->check(check_non_negative);
   demo->add_option("--pixels", da.pixels, "view-dependent mesh: screen-space error in pixels (default 1)")->check(check_positive);
-  demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain");
-  demo->add_option("--raw-size", da.raw_size, "W,H: the size of a headerless .raw/.f32 --heightfield");
+  auto* demo_field = demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain")
+                         ->check(check_file_name)
+                         ->excludes(demo_size);
+  demo->add_option("--raw-size", da.raw_size, "W,H: the size of a headerless .raw/.f32 --heightfield")->check(check_not_empty)->needs(demo_field);
   demo->add_flag("--quiet", da.quiet, "no progress on stderr");
 
   BuildArgs ba;
@@ -509,6 +720,12 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "varmesh: error: %s (see --help)\n", e.what());
     return 1;
   }
+  // What the command is about, for an out-of-memory message.
+  std::string doing;
+  for (const CLI::App* sub = &app; !sub->get_subcommands().empty();) {
+    sub = sub->get_subcommands().front();
+    doing += (doing.empty() ? "" : " ") + sub->get_name();
+  }
   try {
     if (*info) return cmd_info(info_path);
     if (*terrain) return cmd_terrain(ta);
@@ -520,6 +737,21 @@ int run(int argc, char** argv) {
     if (*subdiv) return run_subdiv(sa);
     if (*pm_build) return run_pm_build(pba);
     if (*pm_query) return run_pm_query(pqa);
+  } catch (const IoError& e) {
+    // A file written into a staging folder is named by its final path.
+    const std::string file = StagedFolder::user_path(e.file());
+    std::fprintf(stderr, "varmesh: error: %s\n",
+                 file == e.file() ? e.what() : IoError(file, e.reason(), e.line(), e.byte_offset()).what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    const char* step = Step::failed();
+    std::fprintf(stderr, "varmesh: error: out of memory%s%s (varmesh %s): the input or the options ask for more memory than is available\n",
+                 step ? " while " : "", step ? step : "", doing.c_str());
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    const std::string file = StagedFolder::user_path(e.path1().string());
+    std::fprintf(stderr, "varmesh: error: %s\n", file.empty() ? e.what() : (file + ": " + e.code().message()).c_str());
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "varmesh: error: %s\n", e.what());
     return 1;

@@ -335,7 +335,19 @@ Options parse_options(const CompareArgs& a) {
   o.grid = a.grid_size.empty() ? (a.quick ? 64 : 128) : static_cast<std::size_t>(parse_integer(a.grid_size, "--size", 8, 1024));
   o.panel = static_cast<int>(parse_integer(a.panel, "--panel", 64, 2048));
   parse_collapse_cost(a.cost, o.cost, o.preserve_volume);
-  if (!a.image.empty() && !fs::is_regular_file(a.image)) throw InvalidInput("--image: no such file '" + a.image + "'");
+  if (!a.image.empty()) {
+    if (fs::is_directory(a.image)) throw InvalidInput("--image: '" + a.image + "' is a folder, not a picture file");
+    if (!fs::is_regular_file(a.image)) throw InvalidInput("--image: no such file '" + a.image + "'");
+    if (std::find(o.cases.begin(), o.cases.end(), "image") == o.cases.end())
+      throw InvalidInput("--image is for the image case, which --cases leaves out");
+    // A picture this run writes into --out would replace the input.
+    std::vector<std::string> pictures{"image_features.png"};
+    for (const std::string& c : o.cases) {
+      pictures.push_back(c + "_schemes.png");
+      pictures.push_back(c + "_dual_pieces.png");
+    }
+    for (const std::string& name : pictures) refuse_same_file(a.image, "--image", (o.out / name).string(), "--out's picture");
+  }
   o.image = a.image;
   if (!a.data_dir.empty()) {
     if (!fs::is_directory(a.data_dir)) throw InvalidInput("--data: '" + a.data_dir + "' is not a folder");
@@ -926,7 +938,8 @@ void add_compare_options(CLI::App& sub, CompareArgs& args) {
   sub.add_option("--out", args.out_dir, "output folder (default varmesh_compare)");
   sub.add_option("--cases", args.cases, "comma-separated cases: image,terrain,bunny,cow,dragon (default all)");
   sub.add_option("--data", args.data_dir, "data folder (default $VARMESH_DATA, else ../shared/data; missing files are generated)");
-  sub.add_option("--image", args.image, "image for the image case (PNG or PGM; default images/peppers_256_gray.png)");
+  sub.add_option("--image", args.image, "image for the image case (PNG or PGM; default images/peppers_256_gray.png)")
+      ->check(check_file_name);
   sub.add_option("--features", args.feature_fraction, "fraction of pixels kept as Sobel feature points (default 0.05)")->type_name("FRACTION");
   sub.add_option("--size", args.grid_size, "side of the image and terrain grids in vertices (default 128, 64 with --quick)")->type_name("N");
   sub.add_option("--panel", args.panel, "side of one picture panel in pixels (default 400)")->type_name("PIXELS");

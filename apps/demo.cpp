@@ -5,6 +5,7 @@
 #include <memory>
 #include <cstdio>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -42,24 +43,29 @@ std::vector<Segment3> frustum_outline(const Camera& cam, float far_dist, const g
   return s;
 }
 
+// The files the demo writes into its folder.
+const std::vector<std::string> kOutputs = {"uniform.obj", "view.obj", "uniform.png", "view_camera.png",
+                                           "uniform_topdown.png", "view_topdown.png"};
+
 }  // namespace
 
 int run_demo(const DemoArgs& a) {
   namespace fs = std::filesystem;
   if (std::isnan(a.error)) throw InvalidInput("demo: --error must be a number, not NaN");
   if (!(a.pixels > 0.0f) || !std::isfinite(a.pixels)) throw InvalidInput("demo: --pixels must be finite and > 0");
+  if (a.out_dir.empty()) throw InvalidInput("demo: --out: empty folder name");
+  // Before any work: what is in the way of an output, and an output that would replace the input.
+  StagedFolder::check_targets(a.out_dir, kOutputs);
+  for (const std::string& name : kOutputs) refuse_same_file(a.heightfield, "--heightfield", (fs::path(a.out_dir) / name).string(), "--out's file");
+  HeightFieldReadOptions ro;
+  if (!a.heightfield.empty()) apply_raw_size(a.raw_size, a.heightfield, ro);
   const bool quiet = a.quiet;
 
   HeightField field;
   {
     Step step("making the terrain", quiet);
-    if (a.heightfield.empty()) {
-      field = make_fractal_terrain(a.size, a.size, 2026, 0.18f * float(a.size));
-    } else {
-      HeightFieldReadOptions ro;
-      apply_raw_size(a.raw_size, a.heightfield, ro);
-      field = read_heightfield(a.heightfield, ro);
-    }
+    if (a.heightfield.empty()) field = make_fractal_terrain(a.size, a.size, 2026, 0.18f * float(a.size));
+    else field = read_checked_heightfield(a.heightfield, ro);
   }
   const auto [zmin, zmax] = std::minmax_element(field.z.begin(), field.z.end());
   const float range = *zmax - *zmin;
@@ -167,12 +173,12 @@ int run_demo(const DemoArgs& a) {
   {
     Step step("writing OBJ files and PNG pictures", quiet);
     StagedFolder out(a.out_dir);  // all six files or none (a failed write left the first ones behind)
-    write_mesh(out.path("uniform.obj"), mu);
-    write_mesh(out.path("view.obj"), mv);
-    write_png(out.path("uniform.png"), uniform_png);
-    write_png(out.path("view_camera.png"), view_png);
-    write_png(out.path("uniform_topdown.png"), uniform_topdown_png);
-    write_png(out.path("view_topdown.png"), view_topdown_png);
+    write_mesh(out.path(kOutputs[0]), mu);
+    write_mesh(out.path(kOutputs[1]), mv);
+    write_png(out.path(kOutputs[2]), uniform_png);
+    write_png(out.path(kOutputs[3]), view_png);
+    write_png(out.path(kOutputs[4]), uniform_topdown_png);
+    write_png(out.path(kOutputs[5]), view_topdown_png);
     out.commit();
   }
 

@@ -38,7 +38,7 @@ namespace varmesh::app {
 void add_build_options(CLI::App& sub, BuildArgs& a) {
   sub.add_option("INPUT", a.input, "mesh (.obj/.off/.ply), height field (.pgm/.png/.raw), or torus | saddle | implicit-torus")->required();
   sub.add_option("-o,--output", a.output, "output hierarchy (.vrm)")->required();
-  sub.add_option("--method", a.method, "semiregular (default) | adaptive | simplify4k");
+  sub.add_option("--method", a.method, "semiregular (default) | adaptive | simplify4k")->check(check_not_empty);
   sub.add_option("--levels", a.levels,
                  "semiregular: binary refinement levels (default 4); simplify4k: most levels (0: all); adaptive: deepest "
                  "bisection level, 1-48 (default 40)")
@@ -47,10 +47,11 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
                  "adaptive only: geometric tolerance, > 0 (default: 1% of the height range of a height field; torus "
                  "0.0685, saddle 0.002, implicit-torus 0.046, the paper's figures)")
       ->check(check_positive);
-  sub.add_option("--raw-size", a.raw_size, "adaptive on a .raw float32 height field: W,H");
-  auto* pictures = sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder");
-  sub.add_option("--up", a.up, "with --pictures: x,y,z up axis (default 0,0,1)")->needs(pictures);
-  sub.add_option("--view", a.view, "with --pictures: x,y,z direction from the model towards the eye")->needs(pictures);
+  sub.add_option("--raw-size", a.raw_size, "adaptive on a .raw float32 height field: W,H")->check(check_not_empty);
+  auto* pictures = sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder")
+                       ->check(check_file_name);
+  sub.add_option("--up", a.up, "with --pictures: x,y,z up axis (default 0,0,1)")->check(check_not_empty)->needs(pictures);
+  sub.add_option("--view", a.view, "with --pictures: x,y,z direction from the model towards the eye")->check(check_not_empty)->needs(pictures);
   sub.add_flag("--quiet", a.quiet, "no progress on stderr");
 }
 
@@ -60,20 +61,22 @@ void add_view_query_options(CLI::App& sub, ViewQueryArgs& a, const char* hierarc
   sub.add_option("HIERARCHY", a.input, hierarchy)->required();
   sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off)")->required();
   sub.add_option("--error", a.error, "largest node error allowed (object units)")->check(check_non_negative);
-  auto* camera = sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
+  auto* camera = sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error")
+                     ->check(check_not_empty);
   sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(camera);
   sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(camera);
-  sub.add_option("--budget", a.budget, "triangle budget")->check(CLI::NonNegativeNumber);
-  auto* png = sub.add_option("--png", a.png, "also render the result to this PNG");
-  sub.add_option("--up", a.up, "with --png: x,y,z up axis (default 0,0,1)")->needs(png);
-  sub.add_option("--view", a.view, "with --png: x,y,z direction from the model towards the eye")->needs(png);
+  sub.add_option("--budget", a.budget, "triangle budget")->check(check_count);
+  auto* png = sub.add_option("--png", a.png, "also render the result to this PNG")->check(check_file_name);
+  sub.add_option("--up", a.up, "with --png: x,y,z up axis (default 0,0,1)")->check(check_not_empty)->needs(png);
+  sub.add_option("--view", a.view, "with --png: x,y,z direction from the model towards the eye")->check(check_not_empty)->needs(png);
 }
 
 }  // namespace
 
 void add_query_options(CLI::App& sub, QueryArgs& a) {
   add_view_query_options(sub, a, ".vrm file from varmesh build");
-  sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1");
+  sub.add_option("--ramp", a.ramp, "x0,y0,z0,x1,y1,z1,s0,s1: triangle size grows linearly from s0 at p0 to s1 at p1")
+      ->check(check_not_empty);
   sub.add_flag("--measure", a.measure, "report the RMS and max distance from the finest mesh's vertices to the result "
                                       "(for semiregular hierarchies the finest mesh is a flat subdivision of the base, not the input)");
 }
@@ -89,8 +92,8 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
                  "collapses by Lindstrom-Turk costs (default 4; 0: quadrics to the end, better for models with thin parts "
                  "taken down to tens of faces: the cow at 58 faces has half the error)")
       ->each([&a](const std::string&) { a.lt_finish_given = true; });
-  auto* faces = sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(CLI::NonNegativeNumber);
-  sub.add_option("--vertices", a.vertices, "stop at this many vertices (instead of --faces)")->check(CLI::NonNegativeNumber)->excludes(faces);
+  auto* faces = sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(check_count);
+  sub.add_option("--vertices", a.vertices, "stop at this many vertices (instead of --faces)")->check(check_count)->excludes(faces);
   sub.add_option("--max-error", a.max_error, "no collapse whose error exceeds this (object units): those are skipped, the others go on")
       ->check(check_non_negative);
   sub.add_flag("--colors", a.colors, "colour quadrics (GH98) when the mesh has vertex colours");
@@ -127,7 +130,9 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
     return build_adaptive_implicit(torus_implicit(), o);
   }
   if (is_mesh_file(a.input)) throw InvalidInput("build --method adaptive: give a height field or torus | saddle | implicit-torus, not a mesh");
-  const HeightField field = read_heightfield(a.input, ro);
+  // Checked here (named: the file, its size, its span), not left to the builder: a span past float's reach
+  // made the default tolerance infinite ("tolerance must be finite and > 0, got inf").
+  const HeightField field = read_checked_heightfield(a.input, ro);
   if (o.tolerance <= 0.0f) {
     const auto [lo, hi] = std::minmax_element(field.z.begin(), field.z.end());
     o.tolerance = std::max(1e-6f, 0.01f * (*hi - *lo));
@@ -273,32 +278,65 @@ void add_level_picture(std::vector<Picture>& pictures, const std::string& name, 
   pictures.push_back({name, render_mesh(mesh, cam, o), mesh.num_faces()});
 }
 
-void check_picture_dir(const std::string& dir) {
-  std::error_code ec;
-  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
-    throw IoError(dir, "cannot create the pictures folder: a file of that name exists");
+bool is_builtin_surface(const std::string& input) {
+  return input == "torus" || input == "saddle" || input == "implicit-torus";
 }
 
-// Writes the hierarchy `output` and its pictures, all or nothing: the hierarchy goes to a temporary name
-// beside its target, the pictures to a staging folder inside `dir` (StagedFolder), then the pictures are
-// moved into place and the hierarchy renamed last. A failure on the way leaves `output` and the folder as
-// they were, an earlier run's files included (removing what this run wrote had deleted them). Two renames
-// cannot be one step: should the hierarchy's own rename fail after the pictures are in place (a target made
-// read-only in between; a folder there is refused up front), the new pictures stay beside the old file.
-void write_hierarchy_and_pictures(const std::string& output, const Mt& mt, const std::string& dir,
-                                  const std::vector<Picture>& pictures) {
-  if (dir.empty()) {
-    write_mt(output, mt);
+// The pictures' names that a build of `a` writes, as far as they are known before it runs (simplify4k's levels
+// are not).
+std::vector<std::string> planned_picture_names(const BuildArgs& a) {
+  if (a.method == "adaptive") return {"adaptive_surface.png", "adaptive_domain.png"};
+  std::vector<std::string> names;
+  if (a.method == "semiregular")
+    for (int level = 0; level <= (a.levels < 0 ? 4 : a.levels); ++level)
+      names.push_back("semiregular_level" + std::to_string(level) + ".png");
+  return names;
+}
+
+// Every output of the build against each other and against the input, before any work.
+void check_build_outputs(const BuildArgs& a) {
+  check_output_file(a.output);  // a folder, FIFO or device at -o: refused now, not after the build
+  if (!is_builtin_surface(a.input)) refuse_same_file(a.input, "the input", a.output, "-o");
+  if (a.pictures.empty()) return;
+  // The folder at the hierarchy's path (or around it) would stop the hierarchy's rename at the very end,
+  // after the pictures had been moved into place.
+  if (path_within(a.pictures, a.output))
+    throw InvalidInput("build: --pictures '" + a.pictures + "' and -o '" + a.output + "' are the same place (or the folder "
+                       "would be inside the file): give the pictures folder another name");
+  const std::vector<std::string> names = planned_picture_names(a);
+  StagedFolder::check_targets(a.pictures, names);
+  if (!is_builtin_surface(a.input))
+    for (const std::string& name : names)
+      refuse_same_file(a.input, "the input", (std::filesystem::path(a.pictures) / name).string(), "--pictures' picture");
+  check_picture_axes(a.up, a.view);
+}
+
+// Writes the hierarchy `a.output` and its pictures, all or nothing: the hierarchy goes to a temporary name
+// beside its target, the pictures to a staging folder inside `a.pictures` (StagedFolder), then the pictures
+// are moved into place and the hierarchy renamed last. A failure on the way leaves the output and the folder
+// as they were, an earlier run's files included (removing what this run wrote had deleted them). Two
+// renames cannot be one step: should the hierarchy's own rename fail after the pictures are in place (a
+// target made read-only in between; a folder there is refused up front), the new pictures stay beside the
+// old file.
+void write_hierarchy_and_pictures(const BuildArgs& a, const Mt& mt, const std::vector<Picture>& pictures) {
+  if (a.pictures.empty()) {
+    write_mt(a.output, mt);
     return;
   }
-  write_staged(output, [&](const std::string& staged) { write_mt(staged, mt); },
+  namespace fs = std::filesystem;
+  // The names are all known now (simplify4k's levels included): the same checks as before the work.
+  std::vector<std::string> names;
+  for (const Picture& p : pictures) names.push_back(p.name);
+  StagedFolder::check_targets(a.pictures, names);
+  if (!is_builtin_surface(a.input))
+    for (const std::string& name : names) refuse_same_file(a.input, "the input", (fs::path(a.pictures) / name).string(), "--pictures' picture");
+  write_staged(a.output, [&](const std::string& staged) { write_mt(staged, mt); },
                [&] {
-                 StagedFolder folder(dir);
+                 StagedFolder folder(a.pictures);
                  for (const Picture& p : pictures) write_png(folder.path(p.name), p.image);
                  folder.commit();
                });
-  namespace fs = std::filesystem;
-  for (const Picture& p : pictures) std::printf("  %s: %zu faces\n", (fs::path(dir) / p.name).string().c_str(), p.faces);
+  for (const Picture& p : pictures) std::printf("  %s: %zu faces\n", (fs::path(a.pictures) / p.name).string().c_str(), p.faces);
 }
 
 }  // namespace
@@ -306,10 +344,13 @@ void write_hierarchy_and_pictures(const std::string& output, const Mt& mt, const
 int run_build(const BuildArgs& a) {
   if (std::filesystem::path(a.output).extension() != ".vrm") throw InvalidInput("build: -o must end in .vrm, not '" + a.output + "'");
   if (!std::isfinite(a.tolerance)) throw InvalidInput("build: --tolerance must be a finite number");
+  if (a.method != "adaptive" && a.method != "semiregular" && a.method != "simplify4k")
+    throw InvalidInput("build: unknown --method '" + a.method + "' (semiregular, adaptive, simplify4k)");
   if (a.method != "adaptive") {
     if (a.tolerance > 0.0f) throw InvalidInput("build: --tolerance is for --method adaptive, not " + a.method);
     if (!a.raw_size.empty()) throw InvalidInput("build: --raw-size is for --method adaptive on a .raw height field");
   }
+  check_build_outputs(a);
   Stopwatch watch;
   Mt mt;
   std::vector<Picture> pictures;
@@ -317,7 +358,6 @@ int run_build(const BuildArgs& a) {
     AdaptiveHierarchy h = build_adaptive(a);
     std::printf("adaptive: %zu base faces, %zu faces at the tolerance, max level %d\n", h.num_base_faces, h.num_finest_faces, h.max_level);
     if (!a.pictures.empty()) {
-      check_picture_dir(a.pictures);
       MtFront fine(h.mt);
       for (NodeId n = 1; n < h.mt.num_nodes(); ++n) fine.refine(n);
       const TriMesh mesh = fine.to_mesh();
@@ -348,7 +388,6 @@ int run_build(const BuildArgs& a) {
     std::printf("semiregular: %zu base faces paired into %zu blocks (%zu left over, split 1->2 on the border), %d levels\n",
                 base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, levels);
     if (!a.pictures.empty()) {
-      check_picture_dir(a.pictures);
       const Camera cam = chosen_camera(base, a.up, a.view);
       MtFront front(mt);
       std::vector<NodeId> by_level;
@@ -375,7 +414,6 @@ int run_build(const BuildArgs& a) {
     for (const Simplify4kLevel& l : r.levels) std::printf(" %zu", l.faces);
     std::printf("\n");
     if (!a.pictures.empty()) {
-      check_picture_dir(a.pictures);
       const Camera cam = chosen_camera(input, a.up, a.view);
       // The levels nearest to the face counts of Velho-Gomes Figure 21, plus the input.
       std::vector<std::size_t> levels{0};
@@ -389,13 +427,22 @@ int run_build(const BuildArgs& a) {
     throw InvalidInput("build: unknown --method '" + a.method + "' (semiregular, adaptive, simplify4k)");
   }
   const double ms = watch.ms();
-  write_hierarchy_and_pictures(a.output, mt, a.pictures, pictures);
+  write_hierarchy_and_pictures(a, mt, pictures);
   print_metrics(mt, a.method == "semiregular");
   std::printf("built in %.1f ms -> %s\n", ms, a.output.c_str());
   return 0;
 }
 
 namespace {
+// The outputs of query and pm query, and the picture's axes, checked before the hierarchy is read.
+void check_view_query_outputs(const ViewQueryArgs& a, const char* command) {
+  require_mesh_output(a.output, command);
+  require_png(a.png, command);
+  refuse_same_file(a.input, "the input hierarchy", a.output, "-o");
+  refuse_same_file(a.input, "the input hierarchy", a.png, "--png");
+  check_picture_axes(a.up, a.view);
+}
+
 // The metric of BENCHMARKS.md (issue 3): every original vertex to the nearest triangle.
 void print_distance(const char* what, const SurfaceDistance& d, const char* from) {
   const double rel = d.diagonal > 0.0 ? 1e4 / d.diagonal : 0.0;
@@ -405,11 +452,9 @@ void print_distance(const char* what, const SurfaceDistance& d, const char* from
 }  // namespace
 
 int run_query(const QueryArgs& a) {
-  require_mesh_output(a.output, "query");
-  require_png(a.png, "query");
+  check_view_query_outputs(a, "query");
   if (a.error < 0.0f && a.camera.empty() && a.ramp.empty() && a.budget == 0)
     throw InvalidInput("query: give --error E, --camera ..., --ramp ... or --budget N");
-  const Mt mt = read_mt(a.input);
   std::vector<Criterion> parts;
   add_error_and_camera_criteria(a.error, a.camera, a.pixels, a.viewport, parts);
   if (!a.ramp.empty()) {
@@ -429,6 +474,7 @@ int run_query(const QueryArgs& a) {
       return 2.0 * double(b.radius) <= double(s0) + t * double(s1 - s0);
     }));
   }
+  const Mt mt = read_mt(a.input);
   MtFront front(mt);
   const auto [st, mesh, ms, distance] = extract_and_write(front, parts, a, [&] {
     MtFront finest(mt);  // every node applied: nodes are numbered parents first
@@ -467,6 +513,8 @@ TriMesh input_mesh_of(const VertexHierarchy& h) {
 int run_pm_build(const PmBuildArgs& a) {
   if (!is_mesh_file(a.input)) throw InvalidInput("pm build: INPUT must be a mesh (.obj, .off, .ply), not '" + a.input + "'");
   if (std::filesystem::path(a.output).extension() != ".vmh") throw InvalidInput("pm build: -o must end in .vmh, not '" + a.output + "'");
+  check_output_file(a.output);
+  refuse_same_file(a.input, "the input mesh", a.output, "-o");
   QemOptions o;
   parse_collapse_cost(a.cost, o.cost, o.preserve_volume);
   if (a.non_manifold == "lock") o.non_manifold = NonManifoldPolicy::kLock;
@@ -526,8 +574,7 @@ int run_pm_build(const PmBuildArgs& a) {
 }
 
 int run_pm_query(const PmQueryArgs& a) {
-  require_mesh_output(a.output, "pm query");
-  require_png(a.png, "pm query");
+  check_view_query_outputs(a, "pm query");
   RefinementScheme scheme = RefinementScheme::kKimLee;
   if (a.scheme == "hoppe97") scheme = RefinementScheme::kHoppe97;
   else if (a.scheme == "xia-varshney") scheme = RefinementScheme::kXiaVarshney;

@@ -156,9 +156,14 @@ PolyMesh paired(const std::string& name, const TriMesh& t, std::string* descript
   return p;
 }
 
+bool is_builtin(const std::string& in) { return in == "cube" || in == "torus"; }
+
+// The input's name in picture file names: the built-in's name or the file's stem.
+std::string input_name(const std::string& in) { return is_builtin(in) ? in : fs::path(in).stem().string(); }
+
 Input load_input(const std::string& in) {
   Input r;
-  if (in == "cube" || in == "torus") {
+  if (is_builtin(in)) {
     r.name = in;
     r.poly = in == "cube" ? make_quad_cube() : make_quad_torus(16, 8);
     r.triangles = triangulate(r.poly);
@@ -166,7 +171,7 @@ Input load_input(const std::string& in) {
     return r;
   }
   if (!is_mesh_file(in)) throw InvalidInput("subdiv: INPUT must be a mesh (.obj, .off, .ply) or cube | torus, not '" + in + "'");
-  r.name = fs::path(in).stem().string();
+  r.name = input_name(in);
   ReadInfo info;
   r.triangles = read_input_mesh(in, &info);
   r.triangles.normals.clear();
@@ -359,6 +364,10 @@ void check_output_paths(const SubdivArgs& a) {
   if (a.output.empty()) throw InvalidInput("subdiv: give -o OUT (.obj, .ply, .off) or --figure DIR");
   require_mesh_output(a.output, "subdiv");
   require_png(a.png, "subdiv");
+  if (!is_builtin(a.input)) {
+    refuse_same_file(a.input, "the input", a.output, "-o");
+    refuse_same_file(a.input, "the input", a.png, "--png");
+  }
 }
 
 void check_limits(const SubdivArgs& a) {
@@ -369,9 +378,6 @@ void check_limits(const SubdivArgs& a) {
 int run_figure(const SubdivArgs& a) {
   if (!a.output.empty() || !a.png.empty() || a.adaptive || !a.scheme.empty())
     throw InvalidInput("subdiv --figure: runs every scheme and writes pictures only; drop -o, --png, --adaptive and --scheme");
-  const Input in = load_input(a.input);
-  constexpr int kW = 640, kH = 480;
-  const Camera cam = picture_camera(in.triangles, a, float(kW) / float(kH));
   // Grid order: the quad input and the primal schemes, then the dual schemes and the triangle input with
   // quasi48.
   struct Cell {
@@ -382,6 +388,18 @@ int run_figure(const SubdivArgs& a) {
                                    {"48", Scheme::kFourEight},        {"catmull-clark", Scheme::kCatmullClark},
                                    {"zwart-powell", Scheme::kZwartPowell}, {"doo-sabin", Scheme::kDooSabin},
                                    {"triangles", std::nullopt},      {"quasi48", Scheme::kQuasi48}};
+  // The pictures are written all or nothing (a staging folder inside the figure folder); what would stop
+  // one, or a picture that would replace the input, is refused before any work.
+  std::vector<std::string> names;
+  for (const Cell& c : cells) names.push_back(input_name(a.input) + "_" + c.label + ".png");
+  names.push_back(input_name(a.input) + "_grid.png");
+  StagedFolder::check_targets(a.figure, names);
+  if (!is_builtin(a.input))
+    for (const std::string& name : names) refuse_same_file(a.input, "the input", (fs::path(a.figure) / name).string(), "--figure's picture");
+  check_picture_axes(a.up, a.view);
+  const Input in = load_input(a.input);
+  constexpr int kW = 640, kH = 480;
+  const Camera cam = picture_camera(in.triangles, a, float(kW) / float(kH));
   std::vector<std::optional<Image>> images;
   // The report goes out once everything has worked.
   std::string report;
@@ -410,18 +428,16 @@ int run_figure(const SubdivArgs& a) {
         r.triangles.num_faces(), r.ms);
     images.push_back(render_polygons(r.polygons, cam, kW, kH));
   }
-  std::error_code ec;
-  fs::create_directories(a.figure, ec);
-  if (ec) throw IoError(a.figure, "cannot create the figure folder: " + ec.message());
+  StagedFolder folder(a.figure);
   for (std::size_t i = 0; i < cells.size(); ++i) {
     if (!images[i]) continue;
-    const std::string path = (fs::path(a.figure) / (in.name + "_" + cells[i].label + ".png")).string();
-    write_png(path, *images[i]);
-    add("  %s\n", path.c_str());
+    write_png(folder.path(names[i]), *images[i]);
+    add("  %s\n", (fs::path(a.figure) / names[i]).string().c_str());
   }
-  const std::string grid = (fs::path(a.figure) / (in.name + "_grid.png")).string();
-  write_png(grid, grid_image(images, 4, kW, kH));
-  add("  %s (top: base, linear, 48, catmull-clark; bottom: zwart-powell, doo-sabin, triangles, quasi48)\n", grid.c_str());
+  write_png(folder.path(names.back()), grid_image(images, 4, kW, kH));
+  folder.commit();
+  add("  %s (top: base, linear, 48, catmull-clark; bottom: zwart-powell, doo-sabin, triangles, quasi48)\n",
+      (fs::path(a.figure) / names.back()).string().c_str());
   std::fputs(report.c_str(), stdout);
   return 0;
 }
@@ -436,12 +452,13 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
                  "back as quads and a triangle); a file of triangles only is paired into quads by a maximum "
                  "matching of its dual graph (unpaired triangles stay triangles)")
       ->required();
-  sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off), as triangles");
+  sub.add_option("-o,--output", a.output, "output mesh (.obj, .ply, .off), as triangles")->check(check_file_name);
   sub.add_option("--scheme", a.scheme,
                  "48 (4-8, Velho-Zorin; default) | catmull-clark | linear (4-8 refinement, no smoothing) | "
                  "zwart-powell | doo-sabin | quasi48: the 4-8 rules on the input's triangles paired into quads, our "
                  "stand-in for Velho's quasi 4-8 subdivision (its pairing, not its smoothing rules); on a triangle "
-                 "file it equals 48, on a polygon file or cube/torus it re-pairs their triangulation");
+                 "file it equals 48, on a polygon file or cube/torus it re-pairs their triangulation")
+      ->check(check_not_empty);
   sub.add_option("--levels", a.levels,
                  "dyadic levels (faces x4 each): 2 binary 4-8 steps (48, catmull-clark, linear, quasi48), "
                  "2 Zwart-Powell steps, 1 Doo-Sabin step")
@@ -452,15 +469,17 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
                "build the Multi-Triangulation of the binary steps and extract a front (primal schemes)");
   sub.add_option("--error", a.error, "with --adaptive: largest node error (object units; 0 = refine wherever anything moves)")
       ->check(check_non_negative);
-  auto* camera = sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error");
+  auto* camera = sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error")
+                     ->check(check_not_empty);
   sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(camera);
   sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(camera);
-  sub.add_option("--png", a.png, "also render the result to this PNG (flat shading, polygon edges)");
+  sub.add_option("--png", a.png, "also render the result to this PNG (flat shading, polygon edges)")->check(check_file_name);
   sub.add_option("--figure", a.figure,
                  "write every scheme on INPUT into this folder (one PNG each, same camera, plus a grid): "
-                 "instead of -o");
-  sub.add_option("--view", a.view, "pictures: x,y,z direction from the model towards the eye");
-  sub.add_option("--up", a.up, "pictures: x,y,z up axis (default 0,0,1)");
+                 "instead of -o")
+      ->check(check_file_name);
+  sub.add_option("--view", a.view, "pictures: x,y,z direction from the model towards the eye")->check(check_not_empty);
+  sub.add_option("--up", a.up, "pictures: x,y,z up axis (default 0,0,1)")->check(check_not_empty);
   sub.add_option("--max-triangles", a.max_triangles,
                  "refuse results with more triangles or vertices, checked before running (default 2^25, about 2.7 GB "
                  "at the peak; at most 2^31); --adaptive stores every level: it refuses 8 times fewer");
@@ -473,6 +492,7 @@ int run_subdiv(const SubdivArgs& a) {
     throw InvalidInput("subdiv: --view and --up place the pictures' camera: give --png or --figure");
   if (!a.figure.empty()) return run_figure(a);
   check_output_paths(a);
+  check_picture_axes(a.up, a.view);
   const SchemeInfo& s = parse_scheme(a.scheme);
   const int steps = steps_for(s, a);
   if (a.adaptive && s.dual) throw InvalidInput("subdiv --adaptive: needs a primal scheme (48, catmull-clark, linear, quasi48), not " + std::string(s.name));

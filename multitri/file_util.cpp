@@ -27,22 +27,69 @@ std::string read_file(const std::string& path) {
   return data;
 }
 
+namespace {
+
+std::string describe(std::filesystem::file_type type) {
+  switch (type) {
+    case std::filesystem::file_type::fifo: return "a named pipe (FIFO)";
+    case std::filesystem::file_type::character: return "a character device";
+    case std::filesystem::file_type::block: return "a block device";
+    case std::filesystem::file_type::socket: return "a socket";
+    default: return "not a regular file";
+  }
+}
+
+}  // namespace
+
+std::filesystem::path resolve_output_path(const std::string& path) {
+  namespace fs = std::filesystem;
+  // As many links as the kernel follows (MAXSYMLINKS on Linux).
+  constexpr int kMaxLinks = 40;
+  fs::path p(path);
+  for (int links = 0;; ++links) {
+    std::error_code ec;
+    const fs::file_status st = fs::symlink_status(p, ec);
+    const std::string via = links == 0 ? "" : " (the symbolic link's target " + p.string() + ")";
+    switch (st.type()) {
+      case fs::file_type::not_found:
+      case fs::file_type::regular:
+      case fs::file_type::none:  // unknown (ec set): the write itself reports why
+        return p;
+      case fs::file_type::directory:
+        throw IoError(path, "is a folder" + via + ": the file cannot be put there");
+      case fs::file_type::symlink: {
+        if (links == kMaxLinks) throw IoError(path, "too many levels of symbolic links");
+        const fs::path target = fs::read_symlink(p, ec);
+        if (ec) throw IoError(path, "cannot read the symbolic link: " + ec.message());
+        p = target.is_absolute() ? target : p.parent_path() / target;
+        break;
+      }
+      default:
+        throw IoError(path, "is " + describe(st.type()) + via +
+                                ": only a regular file can be replaced by the output (nothing was written)");
+    }
+  }
+}
+
 void write_file_atomically(const std::string& path, const std::string& contents) {
   namespace fs = std::filesystem;
-  const fs::path target(path);
-  if (target.filename().empty()) throw IoError(path, "not a file name");
-  // A unique temporary name next to the target keeps the rename on one file system.
+  if (fs::path(path).filename().empty()) throw IoError(path, "not a file name");
+  const fs::path target = resolve_output_path(path);
+  // A unique temporary name next to the file replaced keeps the rename on one file system.
   std::random_device rd;
   const fs::path tmp = target.parent_path() / (".tmp." + target.filename().string() + "." + std::to_string(rd()));
   {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw IoError(path, std::string("cannot create a temporary file: ") + std::strerror(errno));
+    errno = 0;
     const bool ok = std::fwrite(contents.data(), 1, contents.size(), f) == contents.size() && std::fflush(f) == 0;
+    const int write_errno = errno;
     const bool closed = std::fclose(f) == 0;
     if (!ok || !closed) {
+      const int why = ok ? errno : write_errno;
       std::error_code ec;
       fs::remove(tmp, ec);
-      throw IoError(path, "write failed (disk full?)");
+      throw IoError(path, "write failed" + (why ? ": " + std::string(std::strerror(why)) : std::string(" (disk full?)")));
     }
   }
   std::error_code ec;

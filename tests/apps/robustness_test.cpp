@@ -2,10 +2,16 @@
 // line of error that names the file, line or option at fault, and leaves no output behind.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
+#include "multitri/errors.hpp"
+#include "multitri/file_util.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
@@ -441,6 +447,409 @@ TEST(Robustness, RenderSeesTheMeshFromAnyCamera) {
   EXPECT_GT(covered(tri + " --eye 0.3,-3,1 --target 0.3,-2.9,0.97"), 50u);  // target well in front of the mesh
   EXPECT_GT(covered(tri + " --eye 0.3,0.3,5 --target 0.3,0.3,0"), 50u);      // straight down
   EXPECT_GT(covered("render " + (dir / "unref.obj").string()), 50u);
+}
+
+// Found by a third review, a fuzzing pass (each failed before its fix).
+
+// Runs `varmesh <args>` with files limited to `blocks` blocks of 512 bytes (ulimit -f; SIGXFSZ ignored, so a
+// write past the limit fails with EFBIG as on a full disk).
+CmdResult run_with_file_limit(int blocks, const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string cmd = "sh -c \"trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; " + VARMESH_EXE + " " + args +
+                          "\" >" + out.string() + " 2>" + err.string();
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, testing::slurp(out), testing::slurp(err)};
+}
+
+// Every entry of `dir` whose name says it is a staging file or folder.
+std::vector<std::string> staging_leftovers(const fs::path& dir) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (contains(name, "partial") || name.rfind(".tmp.", 0) == 0) found.push_back(e.path().string());
+  }
+  return found;
+}
+
+// `build -o h.vrm --pictures h.vrm` made the folder h.vrm, wrote the pictures into it, then failed to move
+// the hierarchy onto it: the pictures stayed. -o naming a folder and --view 0,0,0 were found only after
+// the whole build.
+TEST(Robustness, BuildRefusesClashingOutputsBeforeAnyWork) {
+  const auto dir = testing::scratch_dir("robust_build_clash");
+  std::ofstream(dir / "q.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const std::string build = "build " + (dir / "q.obj").string() + " --quiet ";
+  const std::string vrm = (dir / "h.vrm").string();
+  fs::create_directories(dir / "folder.vrm");
+  const struct {
+    std::string args, says;
+  } cases[] = {
+      {"-o " + vrm + " --pictures " + vrm, "--pictures"},
+      {"-o " + vrm + " --pictures " + (dir / "h.vrm" / "pics").string(), "--pictures"},
+      {"-o " + (dir / "folder.vrm").string(), (dir / "folder.vrm").string() + ": is a folder"},
+      {"-o " + vrm + " --pictures " + (dir / "pics").string() + " --view 0,0,0", "--view: the direction is zero"},
+      {"-o " + vrm + " --pictures " + (dir / "pics").string() + " --up 1,2", "--up"},
+  };
+  for (const auto& c : cases) {
+    const CmdResult r = run(build + c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.says)) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.out, "") << c.args;  // refused before the build, which prints its sizes
+    EXPECT_FALSE(fs::exists(vrm)) << c.args;
+    EXPECT_FALSE(fs::exists(dir / "pics")) << c.args;
+  }
+  EXPECT_TRUE(fs::is_directory(dir / "folder.vrm"));
+  EXPECT_TRUE(fs::is_empty(dir / "folder.vrm"));
+  // The hierarchy inside its own pictures folder is fine.
+  fs::create_directories(dir / "pics");
+  const CmdResult r = run(build + "-o " + (dir / "pics" / "h.vrm").string() + " --pictures " + (dir / "pics").string(), dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "pics" / "h.vrm"));
+  EXPECT_TRUE(fs::exists(dir / "pics" / "semiregular_level0.png"));
+}
+
+// An output could replace an input: `terrain dem.png -o dem.obj --png dem.png` overwrote the height field,
+// `demo --heightfield d/uniform.png --out d` likewise, `subdiv a.obj -o a.obj` its mesh; through a symbolic
+// link or a hard link the names need not even match.
+TEST(Robustness, AnOutputNeverReplacesAnInput) {
+  const auto dir = testing::scratch_dir("robust_output_is_input");
+  Image dem;
+  dem.width = dem.height = 17;
+  dem.channels = 1;
+  for (std::size_t i = 0; i < 17 * 17; ++i) dem.pixels.push_back(static_cast<std::uint8_t>((i * 37) % 251));
+  write_png((dir / "dem.png").string(), dem);
+  fs::create_directories(dir / "d");
+  fs::copy_file(dir / "dem.png", dir / "d" / "uniform.png");
+  fs::create_directories(dir / "pics");
+  fs::copy_file(dir / "dem.png", dir / "pics" / "adaptive_surface.png");
+  std::ofstream(dir / "a.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  CmdResult r = run("build " + (dir / "dem.png").string() + " --method adaptive --quiet -o " + (dir / "h.vrm").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run("pm build " + (dir / "a.obj").string() + " --quiet -o " + (dir / "h.vmh").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  auto link = [&](const std::string& name, const std::string& to) {
+    fs::create_symlink(to, dir / name);
+    return (dir / name).string();
+  };
+  fs::create_hard_link(dir / "a.obj", dir / "hard.obj");
+  const std::string a = (dir / "a.obj").string(), field = (dir / "dem.png").string();
+  const std::string vrm = (dir / "h.vrm").string(), vmh = (dir / "h.vmh").string(), out = (dir / "out.obj").string();
+  const struct {
+    std::string args, input;
+  } cases[] = {
+      {"terrain " + field + " --error 5 -o " + (dir / "dem.obj").string() + " --png " + field, field},
+      {"terrain " + field + " --error 5 -o " + link("dem_link.obj", "dem.png"), field},
+      {"demo --quiet --heightfield " + (dir / "d" / "uniform.png").string() + " --out " + (dir / "d").string(),
+       (dir / "d" / "uniform.png").string()},
+      {"subdiv " + a + " --levels 1 -o " + a, a},
+      {"subdiv " + a + " --levels 1 -o " + (dir / "hard.obj").string(), a},
+      {"subdiv " + a + " --levels 1 -o " + out + " --png " + link("a_link.png", "a.obj"), a},
+      {"subdiv " + a + " --levels 1 --figure " + dir.string(), a},  // no clash: a.obj is not a picture name
+      {"render " + a + " -o " + link("render_link.png", "a.obj"), a},
+      {"build " + a + " --quiet -o " + link("build_link.vrm", "a.obj"), a},
+      {"build " + (dir / "pics" / "adaptive_surface.png").string() + " --method adaptive --quiet -o " +
+           (dir / "h2.vrm").string() + " --pictures " + (dir / "pics").string(),
+       (dir / "pics" / "adaptive_surface.png").string()},
+      {"query " + vrm + " --error 1 -o " + out + " --png " + link("query_link.png", "h.vrm"), vrm},
+      {"pm build " + a + " --quiet -o " + link("pm_link.vmh", "a.obj"), a},
+      {"pm query " + vmh + " --error 1 -o " + link("pmq_link.obj", "h.vmh"), vmh},
+      {"compare --quick --quiet --cases image --image " + (dir / "image_schemes.png").string() + " --out " + dir.string(), ""},
+  };
+  fs::copy_file(dir / "dem.png", dir / "image_schemes.png");
+  for (const auto& c : cases) {
+    const std::string before = c.input.empty() ? "" : testing::slurp(c.input);
+    r = run(c.args, dir);
+    if (contains(c.args, "--figure")) {
+      EXPECT_EQ(r.status, 0) << c.args << "\n" << r.err;
+      continue;
+    }
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, "is the same file as")) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.out, "") << c.args;
+    if (!c.input.empty()) {
+      EXPECT_EQ(testing::slurp(c.input), before) << c.args;
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "dem.obj"));
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir / "h2.vrm"));
+  EXPECT_TRUE(staging_leftovers(dir).empty());
+}
+
+// We run as root: a symbolic link, a FIFO or a device node at an output path was replaced by a regular
+// file. A link to a file (or a dangling one) is now written through and stays a link; anything that is not
+// a regular file is refused before any work.
+TEST(Robustness, LinksAreWrittenThroughAndSpecialFilesAreRefused) {
+  const auto dir = testing::scratch_dir("robust_special_outputs");
+  const fs::path field = write_small_terrain(dir);
+  fs::create_directories(dir / "real");
+  std::ofstream(dir / "real" / "old.obj") << "old\n";
+  fs::create_symlink("real/old.obj", dir / "link.obj");
+  fs::create_symlink("link.obj", dir / "chain.obj");
+  fs::create_symlink("real/new.png", dir / "dangling.png");
+  const std::string terrain = "terrain " + field.string() + " --raw-size 17,17 --error 1 ";
+  CmdResult r = run(terrain + "-o " + (dir / "chain.obj").string() + " --png " + (dir / "dangling.png").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(dir / "chain.obj"));
+  EXPECT_TRUE(fs::is_symlink(dir / "link.obj"));
+  EXPECT_TRUE(fs::is_symlink(dir / "dangling.png"));
+  EXPECT_GT(read_mesh((dir / "real" / "old.obj").string()).num_faces(), 0u);
+  EXPECT_EQ(read_png((dir / "real" / "new.png").string()).width, 1024u);
+  // Without --png the mesh goes through write_file_atomically, with the same policy.
+  fs::remove(dir / "real" / "old.obj");
+  r = run(terrain + "-o " + (dir / "link.obj").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(dir / "link.obj"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "real" / "old.obj"));
+
+  ASSERT_EQ(::mkfifo((dir / "fifo.obj").c_str(), 0644), 0);
+  ASSERT_EQ(::mkfifo((dir / "fifo.png").c_str(), 0644), 0);
+  fs::create_symlink("/dev/null", dir / "null.obj");
+  const std::string ok = (dir / "ok.obj").string();
+  for (const std::string& args : {terrain + "-o " + (dir / "fifo.obj").string(),
+                                  terrain + "-o " + ok + " --png " + (dir / "fifo.png").string(),
+                                  terrain + "-o " + (dir / "null.obj").string(),
+                                  "subdiv cube --levels 1 -o " + (dir / "fifo.obj").string()}) {
+    r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, "named pipe (FIFO)") || contains(r.err, "character device")) << args << "\n" << r.err;
+    EXPECT_EQ(r.out, "") << args;  // before any work
+    EXPECT_FALSE(fs::exists(ok)) << args;
+  }
+  EXPECT_TRUE(fs::is_fifo(dir / "fifo.obj"));
+  EXPECT_TRUE(fs::is_fifo(dir / "fifo.png"));
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+
+  // Folder outputs: a FIFO among the demo's files stops it before any work; a link among them is written
+  // through, and nothing of the staging is left.
+  const fs::path demo = dir / "demo";
+  fs::create_directories(demo);
+  ASSERT_EQ(::mkfifo((demo / "view.obj").c_str(), 0644), 0);
+  r = run("demo --quiet --size 17 --out " + demo.string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, (demo / "view.obj").string() + ": is a named pipe")) << r.err;
+  EXPECT_EQ(r.out, "");
+  fs::remove(demo / "view.obj");
+  EXPECT_TRUE(fs::is_empty(demo));
+  fs::create_symlink("../real/uniform.obj", demo / "uniform.obj");
+  r = run("demo --quiet --size 17 --out " + demo.string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(demo / "uniform.obj"));
+  EXPECT_GT(read_mesh((dir / "real" / "uniform.obj").string()).num_faces(), 0u);
+  EXPECT_TRUE(fs::is_regular_file(demo / "view.obj"));
+  EXPECT_TRUE(staging_leftovers(dir).empty());
+}
+
+// write_file_atomically, under every writer: the policy itself.
+TEST(Robustness, WriteFileAtomicallyFollowsLinksAndRefusesSpecialFiles) {
+  const auto dir = testing::scratch_dir("robust_write_atomically");
+  fs::create_directories(dir / "sub");
+  fs::create_symlink("sub/target.txt", dir / "rel.txt");                // relative, dangling
+  fs::create_symlink((dir / "rel.txt").string(), dir / "abs.txt");       // absolute, to a link
+  write_file_atomically((dir / "abs.txt").string(), "one");
+  EXPECT_TRUE(fs::is_symlink(dir / "abs.txt"));
+  EXPECT_TRUE(fs::is_symlink(dir / "rel.txt"));
+  EXPECT_EQ(testing::slurp(dir / "sub" / "target.txt"), "one");
+  write_file_atomically((dir / "rel.txt").string(), "two");
+  EXPECT_EQ(testing::slurp(dir / "sub" / "target.txt"), "two");
+  EXPECT_EQ(resolve_output_path((dir / "abs.txt").string()), dir / "sub" / "target.txt");
+
+  fs::create_symlink("loop_b", dir / "loop_a");
+  fs::create_symlink("loop_a", dir / "loop_b");
+  fs::create_symlink("sub", dir / "folder_link");
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0644), 0);
+  const struct {
+    std::string path, says;
+  } refused[] = {{(dir / "loop_a").string(), "too many levels of symbolic links"},
+                 {(dir / "sub").string(), "is a folder"},
+                 {(dir / "folder_link").string(), "is a folder"},
+                 {(dir / "fifo").string(), "is a named pipe (FIFO)"},
+                 {"/dev/null", "is a character device"}};
+  for (const auto& c : refused) {
+    try {
+      write_file_atomically(c.path, "x");
+      ADD_FAILURE() << c.path << " was written";
+    } catch (const IoError& e) {
+      EXPECT_EQ(e.file(), c.path);
+      EXPECT_TRUE(contains(e.reason(), c.says)) << e.what();
+    }
+  }
+  EXPECT_TRUE(fs::is_fifo(dir / "fifo"));
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "loop_a")));
+  EXPECT_TRUE(staging_leftovers(dir).empty());
+}
+
+// terrain took --spacing, --z-scale or .raw samples near +-3e38 that put the coordinates beyond float's
+// reach: it wrote meshes the tool refuses to read, or failed with internal words ("frame_sphere: radius
+// inf", "height field sample (1, 1) is not finite"). build --method adaptive said "tolerance must be finite
+// and > 0, got inf" when no tolerance was given.
+TEST(Robustness, TerrainCoordinatesBeyondFloatsReachAreNamedUpFront) {
+  const auto dir = testing::scratch_dir("robust_terrain_span");
+  const fs::path field = write_small_terrain(dir);  // heights within 0..20
+  HeightField huge;
+  huge.width = huge.height = 4;
+  for (int i = 0; i < 16; ++i) huge.z.push_back(i % 2 ? 3e38f : -3e38f);
+  write_heightfield_raw((dir / "huge.raw").string(), huge);
+  const std::string out = (dir / "out.obj").string();
+  const std::string small = "terrain " + field.string() + " --raw-size 17,17 --error 1 -o " + out;
+  const std::string big = (dir / "huge.raw").string() + " --raw-size 4,4";
+  const struct {
+    std::string args, says;
+  } cases[] = {
+      {"terrain " + big + " --error 1 -o " + out, (dir / "huge.raw").string() + ": the heights span 6e+38"},
+      {small + " --spacing 1e18", "--spacing 1e+18: the terrain's bounding box is 2.26274e+19 across"},
+      {small + " --z-scale 1e37", "--z-scale 1e+37: the heights span"},
+      {small + " --z-scale 3e38", "--z-scale 3e+38 makes heights of"},
+      {small + " --spacing 7e17 --z-scale 9e17", "--spacing 7e+17 and --z-scale 9e+17"},
+      {"build " + big + " --method adaptive --quiet -o " + (dir / "h.vrm").string(), (dir / "huge.raw").string()},
+      {"demo --quiet --heightfield " + big + " --out " + (dir / "demo").string(), (dir / "huge.raw").string()},
+  };
+  for (const auto& c : cases) {
+    const CmdResult r = run(c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.says)) << c.args << "\n" << r.err;
+    EXPECT_FALSE(contains(r.err, "tolerance")) << c.args << "\n" << r.err;
+    EXPECT_FALSE(contains(r.err, "not finite")) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir / "h.vrm"));
+  EXPECT_FALSE(fs::exists(dir / "demo"));
+  // Just inside the limit (a diagonal of 1.1e19) the mesh is written, and the tool reads it back.
+  CmdResult r = run(small + " --spacing 5e17", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run("subdiv " + out + " --levels 1 -o " + (dir / "again.obj").string(), dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+}
+
+// --raw-size was parsed as floats and cast (undefined for 1e20; 16777217 read as 16777216); a raw file
+// without it, and --terrain-rgb on a PGM, were reported by an internal function's name.
+TEST(Robustness, RawSizeIsTwoIntegersAndMissingOptionsAreNamed) {
+  const auto dir = testing::scratch_dir("robust_raw_size");
+  const fs::path field = write_small_terrain(dir);
+  std::ofstream(dir / "x.pgm", std::ios::binary) << "P5\n2 2\n255\n" << std::string(4, '\x10');
+  const std::string out = (dir / "out.obj").string();
+  const std::string terrain = "terrain " + field.string() + " --error 1 -o " + out;
+  const struct {
+    std::string args, says;
+  } cases[] = {
+      {terrain + " --raw-size 1e20,17", "--raw-size: expected two positive integers W,H, not '1e20,17'"},
+      {terrain + " --raw-size 17.5,17", "--raw-size: expected two positive integers"},
+      {terrain + " --raw-size 0,17", "--raw-size: expected two positive integers"},
+      {terrain + " --raw-size -17,17", "--raw-size: expected two positive integers"},
+      {terrain + " --raw-size 17", "--raw-size: expected two positive integers"},
+      {terrain + " --raw-size 18446744073709551617,1", "--raw-size: W and H must be at most 268435456"},
+      {terrain + " --raw-size 16777217,1", "16777217x1 float32 samples need 67108868"},
+      {terrain, "give its size with --raw-size W,H"},
+      {"build " + field.string() + " --method adaptive --quiet -o " + (dir / "h.vrm").string(), "--raw-size W,H"},
+      {"demo --quiet --heightfield " + field.string() + " --out " + (dir / "d").string(), "--raw-size W,H"},
+      {"terrain " + (dir / "x.pgm").string() + " --terrain-rgb --error 1 -o " + out,
+       "--terrain-rgb decodes PNG pictures only, not '" + (dir / "x.pgm").string() + "'"},
+  };
+  for (const auto& c : cases) {
+    const CmdResult r = run(c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.says)) << c.args << "\n" << r.err;
+    EXPECT_FALSE(contains(r.err, "read_heightfield")) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// Negative values of options checked by CLI11's NonNegativeNumber printed DBL_MAX in 309 digits; `demo
+// --out ""` said "filesystem error: cannot make absolute path"; empty values passed for "not given"; options
+// that mean nothing without another were ignored; `compare --image FOLDER` said "no such file".
+TEST(Robustness, OptionValuesGetCleanMessages) {
+  const auto dir = testing::scratch_dir("robust_option_values");
+  const fs::path field = write_small_terrain(dir);
+  fs::create_directories(dir / "folder");
+  const std::string out = (dir / "out.obj").string(), vrm = (dir / "h.vrm").string(), vmh = (dir / "h.vmh").string();
+  const std::string terrain = "terrain " + field.string() + " --raw-size 17,17 -o " + out;
+  const struct {
+    std::string args, says;
+  } cases[] = {
+      {terrain + " --error -1", "--error: must be >= 0, not -1"},
+      {terrain + " --error 1 --budget -1", "--budget: must be an integer >= 0, not '-1'"},
+      {"query " + vrm + " --budget -1 -o " + out, "--budget: must be an integer >= 0"},
+      {"pm query " + vmh + " --budget -1 -o " + out, "--budget: must be an integer >= 0"},
+      {"pm query " + vmh + " --budget 2.5 -o " + out, "--budget: must be an integer >= 0, not '2.5'"},
+      {"pm build " + out + " --faces -5 -o " + vmh, "--faces: must be an integer >= 0, not '-5'"},
+      {"pm build " + out + " --vertices -5 -o " + vmh, "--vertices: must be an integer >= 0"},
+      {"demo --quiet --out ''", "--out: empty file name"},
+      {terrain + " --error 1 --png ''", "--png: empty file name"},
+      {"build cube.obj -o " + vrm + " --pictures ''", "--pictures: empty file name"},
+      {terrain + " --camera '' --pixels 2", "--camera: empty value"},
+      {"query " + vrm + " -o " + out + " --camera '' --pixels 2", "--camera: empty value"},
+      {"demo --quiet --heightfield '' --out " + (dir / "d").string(), "--heightfield: empty file name"},
+      {"compare --quiet --image '' --out " + (dir / "c").string(), "--image: empty file name"},
+      {"subdiv cube --levels 1 --scheme '' -o " + out, "--scheme: empty value"},
+      {"subdiv cube --levels 1 -o ''", "--output: empty file name"},
+      {"demo --quiet --raw-size 17,17 --out " + (dir / "d").string(), "--raw-size requires --heightfield"},
+      {"demo --quiet --heightfield " + field.string() + " --raw-size 17,17 --size 33 --out " + (dir / "d").string(),
+       "--size excludes --heightfield"},
+      {terrain + " --error 1 --pixels 2", "--pixels requires --camera"},
+      {"query " + vrm + " -o " + out + " --error 1 --up 0,1,0", "--up requires --png"},
+      {"compare --quiet --image " + (dir / "folder").string() + " --out " + (dir / "c").string(), "is a folder, not a picture file"},
+      {"compare --quiet --cases cow --image " + field.string() + " --out " + (dir / "c").string(), "--image is for the image case"},
+  };
+  for (const auto& c : cases) {
+    const CmdResult r = run(c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.says)) << c.args << "\n" << r.err;
+    EXPECT_LT(r.err.size(), 200u) << c.args << "\n" << r.err;
+    EXPECT_FALSE(contains(r.err, "filesystem error")) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.out, "") << c.args;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir / "d"));
+  EXPECT_FALSE(fs::exists(dir / "c"));
+}
+
+// A write that failed inside a staging folder named it ("dem/.varmesh-partial-23497-285899160/uniform.obj:
+// write failed"): the user's final path is named now. Files are limited to 2 kB, as a full disk would.
+TEST(Robustness, FailedWritesInStagedFoldersNameTheFinalPath) {
+  const auto dir = testing::scratch_dir("robust_staged_names");
+  const fs::path demo = dir / "demo", fig = dir / "fig";
+  const struct {
+    std::string args, names;
+  } cases[] = {
+      {"demo --quiet --size 17 --out " + demo.string(), (demo / "uniform.obj").string() + ": write failed: File too large"},
+      {"subdiv cube --levels 1 --figure " + fig.string(), (fig / "cube_base.png").string() + ": write failed"},
+  };
+  for (const auto& c : cases) {
+    const CmdResult r = run_with_file_limit(4, c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.names)) << c.args << "\n" << r.err;
+    EXPECT_FALSE(contains(r.err, "partial")) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(demo));
+  EXPECT_FALSE(fs::exists(fig));
+}
+
+// Out of memory printed "std::bad_alloc" alone. Address space limited by ulimit -v, which the sanitizers'
+// shadow memory cannot live with.
+TEST(Robustness, OutOfMemoryIsSaid) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "ulimit -v and AddressSanitizer do not mix";
+#else
+  const auto dir = testing::scratch_dir("robust_out_of_memory");
+  const fs::path out = dir / "demo";
+  const std::string cmd = "sh -c \"ulimit -v 80000; " + std::string(VARMESH_EXE) + " demo --quiet --size 2049 --out " +
+                          out.string() + "\" 2>" + (dir / "stderr.txt").string();
+  const int raw = std::system(cmd.c_str());
+  const std::string err = testing::slurp(dir / "stderr.txt");
+  EXPECT_EQ(WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, 1) << err;
+  EXPECT_EQ(count_lines(err), 1) << err;
+  // "out of memory while <step> (varmesh demo)" when the failure falls within one of the steps announced on
+  // stderr (which one depends on the machine).
+  EXPECT_TRUE(contains(err, "varmesh: error: out of memory")) << err;
+  EXPECT_TRUE(contains(err, "(varmesh demo)")) << err;
+  EXPECT_FALSE(fs::exists(out));
+#endif
 }
 
 }  // namespace

@@ -310,5 +310,51 @@ TEST(SubdivCli, FigureDrawsEverySchemeWithOneCamera) {
     EXPECT_NE(r.out.find(s), std::string::npos) << s;
 }
 
+// --figure wrote its pictures straight into the folder: a picture that could not be written (here a folder
+// in its place; a full disk likewise) left the others behind. They are staged now, the folder in the way is
+// found before any work, and an earlier figure survives a failed run.
+TEST(SubdivCli, FigureIsWrittenAllOrNothing) {
+  const auto dir = testing::scratch_dir("subdiv_figure_staged");
+  const fs::path fig = dir / "fig";
+  fs::create_directories(fig / "cube_grid.png");
+  CmdResult r = run("cube --levels 1 --figure " + fig.string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find((fig / "cube_grid.png").string() + ": is a folder"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(fig)) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"cube_grid.png"});
+  // A working run, then one that fails while writing (files limited to 4 kB, like a full disk): the first
+  // run's pictures are untouched and nothing of the second is left.
+  fs::remove(fig / "cube_grid.png");
+  r = run("cube --levels 1 --figure " + fig.string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string base = testing::slurp(fig / "cube_base.png");
+  const std::string cmd = "sh -c \"trap '' XFSZ; ulimit -f 8; " + std::string(VARMESH_EXE) + " subdiv cube --levels 2 --figure " +
+                          fig.string() + "\" >/dev/null 2>" + (dir / "stderr.txt").string();
+  const int raw = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 1);
+  const std::string err = testing::slurp(dir / "stderr.txt");
+  EXPECT_NE(err.find(fig.string() + "/cube_"), std::string::npos) << err;
+  EXPECT_EQ(err.find("partial"), std::string::npos) << err;
+  EXPECT_EQ(testing::slurp(fig / "cube_base.png"), base);
+  std::size_t entries = 0;
+  for (const auto& e : fs::directory_iterator(fig)) {
+    ++entries;
+    EXPECT_EQ(e.path().filename().string().find("partial"), std::string::npos) << e.path();
+  }
+  EXPECT_EQ(entries, 9u);
+  // A picture that would replace the input (here through a link) is refused.
+  const std::string quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+  std::ofstream(dir / "m.obj") << quad;
+  fs::create_directories(dir / "fig2");
+  fs::create_symlink("../m.obj", dir / "fig2" / "m_base.png");
+  r = run((dir / "m.obj").string() + " --levels 1 --figure " + (dir / "fig2").string(), dir);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("is the same file as the input"), std::string::npos) << r.err;
+  EXPECT_EQ(testing::slurp(dir / "m.obj"), quad);
+}
+
 }  // namespace
 }  // namespace varmesh
