@@ -36,6 +36,17 @@ MeshReport report_of(TriMesh m) {
   return analyze_mesh(m);
 }
 
+// A level-4 icosphere with every vertex moved radially by up to +-30 % (a linear congruential sequence from
+// `seed`): curved and rough enough that the flip rule refuses collapses.
+TriMesh noisy_icosphere(std::uint32_t seed) {
+  TriMesh m = make_icosphere(4);
+  for (glm::vec3& p : m.positions) {
+    seed = seed * 1664525u + 1013904223u;
+    p *= 1.0f + 0.6f * (static_cast<float>(seed >> 8) / 16777216.0f - 0.5f);
+  }
+  return m;
+}
+
 QemOptions with_cost(CollapseCost cost) {
   QemOptions o;
   o.cost = cost;
@@ -430,12 +441,7 @@ TEST(QemAnalysis, FlipReplayFindsTurnedFaces) {
 // base mesh), on curved meshes where the rule refuses collapses: a sphere with +-30 % radial noise, a bumpy
 // torus and a bumpy open grid.
 TEST(QemAnalysis, NoCollapseTurnsAFaceOver) {
-  TriMesh noisy = make_icosphere(4);
-  std::uint32_t seed = 777;
-  for (glm::vec3& p : noisy.positions) {
-    seed = seed * 1664525u + 1013904223u;
-    p *= 1.0f + 0.6f * (static_cast<float>(seed >> 8) / 16777216.0f - 0.5f);
-  }
+  const TriMesh noisy = noisy_icosphere(777);
   std::size_t refused = 0;
   for (const TriMesh& m : {noisy, make_torus(48, 24, 2.0f, 0.7f, 0.4f), make_grid(30, 24, 0.8f)}) {
     for (const bool target : {true, false}) {
@@ -614,12 +620,7 @@ TEST(QemAnalysis, LindstromTurkFinishTakesOverAtItsThreshold) {
 // are, the count matches the edges of the mesh after the quadric phase's collapses, counted here from the
 // hierarchy. (Re-costing only the edges still queued fails here: 598 of 600.)
 TEST(QemAnalysis, LindstromTurkFinishCostsEveryEdgeOfTheMesh) {
-  TriMesh m = make_icosphere(4);
-  std::uint32_t seed = 12345;
-  for (glm::vec3& p : m.positions) {
-    seed = seed * 1664525u + 1013904223u;
-    p *= 1.0f + 0.6f * (static_cast<float>(seed >> 8) / 16777216.0f - 0.5f);
-  }
+  const TriMesh m = noisy_icosphere(12345);
   for (const double factor : {2.0, 4.0, 8.0}) {
     QemOptions o;
     o.target_faces = 100;
