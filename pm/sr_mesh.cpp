@@ -494,6 +494,7 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
       // records would be inconsistent (the reader rejects such files; this guards the arrays).
       if (h_->is_leaf(vl)) throw std::logic_error("SrMesh: both cut vertices of node " + std::to_string(vs) + " are leaf " + std::to_string(vl));
       ++stats_.degenerate_cases;
+      ++stats_.presplits;
       vsplit_kim_lee(vl);
       continue;
     }
@@ -524,12 +525,11 @@ bool SrMesh::vsplit_hoppe(Index target) {
       }
     if (missing) continue;
     stack.pop_back();
-    // Legal: the same physical split (a coincident cut vertex is split first, as in Kim-Lee).
-    const std::size_t dc = stats_.degenerate_cases;
-    const std::size_t before = stats_.vsplits;
+    // Legal: the same physical split (a coincident cut vertex is split first, as in Kim-Lee, and counted as
+    // a presplit only, as under the other rules).
+    const std::size_t before = stats_.vsplits - stats_.presplits;
     vsplit_kim_lee(v);
-    (void)dc;
-    if (v != target) stats_.forced_vsplits += stats_.vsplits - before;
+    if (v != target) stats_.forced_vsplits += stats_.vsplits - stats_.presplits - before;
   }
   return node_refined(target);
 }
@@ -608,6 +608,7 @@ bool SrMesh::ecol(Index vs) {
     case RefinementScheme::kKimLee:
       if (extra_common_neighbors(vs)) {
         ++stats_.degenerate_cases;  // section 4.4: postponed
+        ++stats_.postponed_ecols;
         ++stats_.refused_ecols;
         return false;
       }
@@ -621,9 +622,7 @@ bool SrMesh::ecol(Index vs) {
       do_ecol(vs);
       return true;
     case RefinementScheme::kXiaVarshney: {
-      const std::size_t before = stats_.ecols;
       const bool ok = ecol_xv(vs, 0);
-      (void)before;
       if (!ok) ++stats_.refused_ecols;
       return ok;
     }

@@ -9,9 +9,9 @@
 ///   so an operation costs O(k) for a k-vertex 1-ring. (A split done in the PM order, as refine_all does
 ///   them, knows its cut vertices from the collapse sequence and compares node ids instead of reading
 ///   keys; so does a split in another order whose PM-order cut vertex is in the ring.) Degenerate cases
-///   (section 4.4), counted in SrStats::degenerate_cases: an ecol whose ends have common neighbours besides
-///   the cut vertices is postponed (ecol returns false); a vsplit whose two cut vertices coincide first
-///   splits that vertex.
+///   (section 4.4), counted in SrStats::degenerate_cases and apart: an ecol whose ends have common
+///   neighbours besides the cut vertices is postponed (ecol returns false; SrStats::postponed_ecols); a
+///   vsplit whose two cut vertices coincide first splits that vertex (SrStats::presplits).
 /// - kHoppe97 (Hoppe 1997, "View-dependent refinement of progressive meshes", section 4): vsplit(vs) is legal
 ///   when vs is active and the four stored neighbour faces fn0..fn3 are active; otherwise the vertices whose
 ///   splits create the missing faces are split first (forced, recursively). ecol is legal when the faces
@@ -60,11 +60,14 @@ enum class RefinementScheme : std::uint8_t { kKimLee, kHoppe97, kXiaVarshney };
 const char* scheme_name(RefinementScheme s) noexcept;
 
 struct SrStats {
-  std::size_t vsplits = 0;          ///< every vsplit performed (requested and forced)
+  std::size_t vsplits = 0;          ///< every vsplit performed (requested, forced and presplits)
   std::size_t ecols = 0;            ///< every ecol performed (requested and forced)
-  std::size_t forced_vsplits = 0;   ///< vsplits done only to satisfy a dependency rule
+  std::size_t forced_vsplits = 0;   ///< vsplits done only to satisfy a dependency rule (not the presplits)
   std::size_t forced_ecols = 0;     ///< ecols done only to satisfy a dependency rule (Xia-Varshney)
-  std::size_t degenerate_cases = 0; ///< Kim-Lee #DC: postponed ecols + cut-vertex pre-splits
+  /// Kim-Lee #DC (section 4.4): presplits + postponed_ecols, kept as their sum for the callers of the total.
+  std::size_t degenerate_cases = 0;
+  std::size_t presplits = 0;        ///< splits of a cut vertex found as both cut vertices of a vsplit (any scheme)
+  std::size_t postponed_ecols = 0;  ///< Kim-Lee ecols postponed while vt and vu have extra common neighbours
   std::size_t refused_ecols = 0;    ///< ecols not done because their rule did not allow them
   std::size_t failed_vsplits = 0;   ///< vsplits abandoned on a dependency cycle (Xia-Varshney only)
 };

@@ -74,6 +74,15 @@ std::array<Outcome, 3> run_schemes(const VertexHierarchy& h, const std::vector<s
     for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v)
       unsplit += needs[v] && m.state(static_cast<Index>(v)) != SrMesh::State::kRefined;
     EXPECT_EQ(unsplit, 0u);
+    // The mesh is fresh, so its counters are this run's. Every split is requested, forced or a section 4.4
+    // pre-split, counted once; every collapse is forced (none is requested); nothing is collapsed, so no
+    // collapse is postponed and #DC is the pre-splits.
+    const SrStats& st = m.stats();
+    EXPECT_EQ(st.vsplits, out[k].result.requested_vsplits + st.forced_vsplits + st.presplits);
+    EXPECT_EQ(st.ecols, st.forced_ecols);
+    EXPECT_EQ(st.postponed_ecols, 0u);
+    EXPECT_EQ(st.degenerate_cases, st.presplits);
+    EXPECT_EQ(out[k].result.stats.degenerate_cases, st.degenerate_cases);
     if (kSchemes[k] == RefinementScheme::kKimLee) {
       EXPECT_EQ(out[k].result.stats.forced_vsplits, 0u);
       EXPECT_EQ(out[k].result.stats.forced_ecols, 0u);
@@ -81,8 +90,8 @@ std::array<Outcome, 3> run_schemes(const VertexHierarchy& h, const std::vector<s
       std::size_t extra = 0;
       for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v)
         extra += !needs[v] && m.state(static_cast<Index>(v)) == SrMesh::State::kRefined;
-      EXPECT_LE(extra, out[k].result.stats.degenerate_cases);
-      EXPECT_EQ(out[k].result.requested_vsplits + out[k].result.stats.degenerate_cases, out[k].result.stats.vsplits);
+      EXPECT_LE(extra, st.presplits);
+      EXPECT_EQ(out[k].result.requested_vsplits + st.presplits, out[k].result.stats.vsplits);
     }
     out[k].vertices = m.num_active_vertices();
     out[k].faces = m.num_faces();
