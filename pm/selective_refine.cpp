@@ -52,6 +52,8 @@ SelectiveRefineResult refine_to_predicate(SrMesh& mesh, const std::function<bool
   out.stats.forced_vsplits = after.forced_vsplits - before.forced_vsplits;
   out.stats.forced_ecols = after.forced_ecols - before.forced_ecols;
   out.stats.degenerate_cases = after.degenerate_cases - before.degenerate_cases;
+  out.stats.presplits = after.presplits - before.presplits;
+  out.stats.postponed_ecols = after.postponed_ecols - before.postponed_ecols;
   out.stats.refused_ecols = after.refused_ecols - before.refused_ecols;
   out.stats.failed_vsplits = after.failed_vsplits - before.failed_vsplits;
   return out;

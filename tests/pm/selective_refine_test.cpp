@@ -83,6 +83,8 @@ std::array<Outcome, 3> run_schemes(const VertexHierarchy& h, const std::vector<s
     EXPECT_EQ(st.postponed_ecols, 0u);
     EXPECT_EQ(st.degenerate_cases, st.presplits);
     EXPECT_EQ(out[k].result.stats.degenerate_cases, st.degenerate_cases);
+    EXPECT_EQ(out[k].result.stats.presplits, st.presplits);
+    EXPECT_EQ(out[k].result.stats.postponed_ecols, st.postponed_ecols);
     if (kSchemes[k] == RefinementScheme::kKimLee) {
       EXPECT_EQ(out[k].result.stats.forced_vsplits, 0u);
       EXPECT_EQ(out[k].result.stats.forced_ecols, 0u);
