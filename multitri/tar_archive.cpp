@@ -136,9 +136,13 @@ std::optional<std::string> pax_path(const std::string& data) {
   std::size_t at = 0;
   std::optional<std::string> path;
   while (at < data.size()) {
+    // The record's length (digits, then a space) counts the whole record, itself and the newline included.
     std::size_t len = 0;
     std::size_t i = at;
-    while (i < data.size() && data[i] >= '0' && data[i] <= '9' && len < data.size()) len = len * 10 + static_cast<std::size_t>(data[i++] - '0');
+    for (; i < data.size() && data[i] >= '0' && data[i] <= '9'; ++i) {
+      len = len * 10 + static_cast<std::size_t>(data[i] - '0');
+      if (len > data.size()) return path;  // longer than the header: malformed, nothing more to read
+    }
     if (len == 0 || at + len > data.size() || i >= data.size() || data[i] != ' ' || data[at + len - 1] != '\n') break;
     const std::string_view record(data.data() + i + 1, at + len - 1 - (i + 1));
     const std::size_t eq = record.find('=');
