@@ -78,6 +78,10 @@ HeightField read_checked_heightfield(const std::string& path, const HeightFieldR
 void check_output_file(const std::string& path);
 void refuse_same_file(const std::string& input, const std::string& input_what, const std::string& output,
                       const std::string& output_what);
+/// InvalidInput when two outputs of one command are the same file (symbolic links followed, as the writers
+/// do; hard links by std::filesystem::equivalent): the second would replace the first. Names both options.
+void refuse_same_output(const std::string& first, const std::string& first_what, const std::string& second,
+                        const std::string& second_what);
 /// True when `inner` is `outer` or lies inside the folder `outer` (normalized absolute paths, links in the
 /// existing part resolved).
 bool path_within(const std::string& inner, const std::string& outer);

@@ -244,14 +244,32 @@ void check_output_file(const std::string& path) {
   if (!path.empty()) resolve_output_path(path);
 }
 
+namespace {
+
+// The same file by std::filesystem::equivalent when both exist (links and hard links included), else the
+// same normalized absolute path.
+bool same_file(const std::string& x, const std::string& y) {
+  namespace fs = std::filesystem;
+  std::error_code ec1, ec2, ec3;
+  const bool both = fs::exists(x, ec1) && fs::exists(y, ec2);
+  return both ? fs::equivalent(x, y, ec3) : comparable_path(x) == comparable_path(y);
+}
+
+}  // namespace
+
+void refuse_same_output(const std::string& first, const std::string& first_what, const std::string& second,
+                        const std::string& second_what) {
+  if (first.empty() || second.empty()) return;
+  // Links are written through (resolve_output_path), so two links to one new file are one output.
+  if (same_file(resolve_output_path(first).string(), resolve_output_path(second).string()))
+    throw InvalidInput(first_what + " '" + first + "' and " + second_what + " '" + second +
+                       "' are the same file: one output would overwrite the other; choose another name");
+}
+
 void refuse_same_file(const std::string& input, const std::string& input_what, const std::string& output,
                       const std::string& output_what) {
-  namespace fs = std::filesystem;
   if (input.empty() || output.empty()) return;
-  std::error_code ec1, ec2, ec3;
-  const bool both = fs::exists(input, ec1) && fs::exists(output, ec2);
-  const bool same = both ? fs::equivalent(input, output, ec3) : comparable_path(input) == comparable_path(output);
-  if (same)
+  if (same_file(input, output))
     throw InvalidInput(output_what + " '" + output + "' is the same file as " + input_what + " '" + input +
                        "': writing it would destroy the input; choose another name");
 }
@@ -509,6 +527,7 @@ int cmd_terrain(const TerrainArgs& a) {
   require_png(a.png, "terrain");
   refuse_same_file(a.input, "the input height field", a.output, "-o");
   refuse_same_file(a.input, "the input height field", a.png, "--png");
+  refuse_same_output(a.output, "-o", a.png, "--png");
   HeightFieldReadOptions ro;
   ro.decoding = a.terrain_rgb ? PixelDecoding::kTerrainRgb : PixelDecoding::kGray;
   if (!std::isfinite(a.z_scale)) throw InvalidInput("terrain: --z-scale must be a finite number");

@@ -440,6 +440,7 @@ void check_view_query_outputs(const ViewQueryArgs& a, const char* command) {
   require_png(a.png, command);
   refuse_same_file(a.input, "the input hierarchy", a.output, "-o");
   refuse_same_file(a.input, "the input hierarchy", a.png, "--png");
+  refuse_same_output(a.output, "-o", a.png, "--png");
   check_picture_axes(a.up, a.view);
 }
 

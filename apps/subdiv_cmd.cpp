@@ -368,6 +368,7 @@ void check_output_paths(const SubdivArgs& a) {
     refuse_same_file(a.input, "the input", a.output, "-o");
     refuse_same_file(a.input, "the input", a.png, "--png");
   }
+  refuse_same_output(a.output, "-o", a.png, "--png");
 }
 
 void check_limits(const SubdivArgs& a) {

@@ -642,6 +642,46 @@ TEST(Robustness, LinksAreWrittenThroughAndSpecialFilesAreRefused) {
   EXPECT_TRUE(staging_leftovers(dir).empty());
 }
 
+// Two outputs of one command that are one file (through symbolic links, dangling or not, or a hard link):
+// the picture would have replaced the mesh. Refused before any work, naming both options; nothing written.
+TEST(Robustness, TwoOutputsThatAreOneFileAreRefused) {
+  const auto dir = testing::scratch_dir("robust_output_pairs");
+  const fs::path field = write_small_terrain(dir);
+  std::ofstream(dir / "a.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  CmdResult r = run("pm build " + (dir / "a.obj").string() + " --quiet -o " + (dir / "h.vmh").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ofstream(dir / "kept.obj") << "kept\n";
+  fs::create_symlink("kept.obj", dir / "kept_link.png");          // to an existing file
+  fs::create_symlink("new.obj", dir / "new_link.png");            // both to one file that does not exist yet
+  fs::create_symlink("new.obj", dir / "new_link.obj");
+  fs::create_hard_link(dir / "kept.obj", dir / "kept_hard.png");  // a hard link cannot be told by its name
+  const std::string terrain = "terrain " + field.string() + " --raw-size 17,17 --error 1 ";
+  const std::string kept = (dir / "kept.obj").string(), a = (dir / "a.obj").string();
+  const std::vector<std::string> cases = {
+      terrain + "-o " + kept + " --png " + (dir / "kept_link.png").string(),
+      terrain + "-o " + (dir / "new_link.obj").string() + " --png " + (dir / "new_link.png").string(),
+      terrain + "-o " + kept + " --png " + (dir / "kept_hard.png").string(),
+      "subdiv " + a + " --levels 1 -o " + kept + " --png " + (dir / "kept_link.png").string(),
+      "pm query " + (dir / "h.vmh").string() + " --error 1 -o " + (dir / "new_link.obj").string() + " --png " +
+          (dir / "new_link.png").string(),
+  };
+  for (const std::string& c : cases) {
+    r = run(c, dir);
+    EXPECT_EQ(r.status, 1) << c << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, "-o '") && contains(r.err, "--png '") && contains(r.err, "are the same file"))
+        << c << "\n" << r.err;
+    EXPECT_EQ(r.out, "") << c;
+    EXPECT_EQ(testing::slurp(kept), "kept\n") << c;
+    EXPECT_FALSE(fs::exists(dir / "new.obj")) << c;
+  }
+  EXPECT_TRUE(staging_leftovers(dir).empty());
+  // Two different files through links are still fine.
+  r = run(terrain + "-o " + (dir / "new_link.obj").string() + " --png " + (dir / "pic.png").string(), dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_GT(read_mesh((dir / "new.obj").string()).num_faces(), 0u);
+}
+
 // write_file_atomically, under every writer: the policy itself.
 TEST(Robustness, WriteFileAtomicallyFollowsLinksAndRefusesSpecialFiles) {
   const auto dir = testing::scratch_dir("robust_write_atomically");
