@@ -25,6 +25,19 @@ glm::vec3 usable_up(const glm::vec3& forward, const glm::vec3& up) {
 }
 }  // namespace
 
+void Camera::validate() const {
+  auto finite3 = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  if (!finite3(eye) || !finite3(target) || !finite3(up)) throw InvalidInput("camera: eye, target and up must be finite");
+  if (eye == target) throw InvalidInput("camera: eye and target are the same point (no view direction)");
+  if (up == glm::vec3(0.0f)) throw InvalidInput("camera: up is zero");
+  if (!(fov_y_deg > 0.0f && fov_y_deg < 180.0f))
+    throw InvalidInput("camera: fov_y_deg " + std::to_string(fov_y_deg) + " is not in (0, 180)");
+  if (!(aspect > 0.0f) || !std::isfinite(aspect)) throw InvalidInput("camera: aspect " + std::to_string(aspect) + " is not positive");
+  if (!(z_near > 0.0f) || !(z_near < z_far) || !std::isfinite(z_far))
+    throw InvalidInput("camera: z_near " + std::to_string(z_near) + " and z_far " + std::to_string(z_far) +
+                       " must satisfy 0 < z_near < z_far (finite)");
+}
+
 glm::vec3 Camera::view_up() const {
   const glm::vec3 d = target - eye;
   const float len = glm::length(d);

@@ -39,6 +39,10 @@ struct Camera {
   float z_near = 0.01f;
   float z_far = 1000.0f;
 
+  /// Throws InvalidInput (naming the field) unless every field is finite, eye != target, up != 0,
+  /// fov_y_deg is in (0, 180), aspect > 0 and 0 < z_near < z_far. A camera that fails it makes NaN or
+  /// inverted planes, which cull nothing or everything without a word.
+  void validate() const;
   /// lookAt(eye, target, up); an `up` parallel to the view direction (a top view with the default +z up)
   /// is replaced by the world axis least aligned with the view (+y first), as frame_sphere does.
   glm::mat4 view() const;
