@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <glm/trigonometric.hpp>
 
 #include "apps/cli_util.hpp"
 #include "apps/compare.hpp"
@@ -241,7 +242,17 @@ std::filesystem::path comparable_path(const std::string& path) {
 }  // namespace
 
 void check_output_file(const std::string& path) {
-  if (!path.empty()) resolve_output_path(path);
+  namespace fs = std::filesystem;
+  if (path.empty()) return;
+  // The file itself (links followed), then the folder it goes in: a missing folder was found only when
+  // the result was written, after all the work (seconds on the full dragon).
+  const fs::path target = resolve_output_path(path);
+  const fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  std::error_code ec;
+  const fs::file_status st = fs::status(folder, ec);
+  if (!fs::exists(st))
+    throw IoError(path, "its folder '" + folder.string() + "' does not exist: make it first (nothing was written)");
+  if (!fs::is_directory(st)) throw IoError(path, "'" + folder.string() + "' is not a folder (nothing was written)");
 }
 
 namespace {
@@ -522,7 +533,8 @@ struct TerrainArgs {
 
 int cmd_terrain(const TerrainArgs& a) {
   if (std::isnan(a.error)) throw InvalidInput("terrain: --error must be a number, not NaN");
-  if (a.error < 0.0f && a.camera.empty()) throw InvalidInput("terrain: give --error E, --camera ..., or both");
+  if (a.error < 0.0f && a.camera.empty() && a.budget == 0)
+    throw InvalidInput("terrain: give --error E, --camera ... or --budget N (or several)");
   require_mesh_output(a.output, "terrain");
   require_png(a.png, "terrain");
   refuse_same_file(a.input, "the input height field", a.output, "-o");
@@ -574,7 +586,10 @@ int cmd_terrain(const TerrainArgs& a) {
     parts.push_back(Criterion::screen_error(cam, a.viewport, a.pixels));
   }
   if (a.error >= 0.0f) parts.push_back(Criterion::object_error(a.error));
-  q.criterion = parts.size() == 1 ? parts[0] : Criterion::any_of(parts);
+  // --budget alone (as in query and pm query): nothing is fine, the budget is the only limit.
+  q.criterion = parts.empty()         ? Criterion::custom([](const ElementBound&) { return false; })
+                : parts.size() == 1 ? parts[0]
+                                    : Criterion::any_of(parts);
   q.triangle_budget = a.budget;
   Grid48Front front(grid);
   Stopwatch extract_watch;
@@ -611,21 +626,42 @@ int cmd_terrain(const TerrainArgs& a) {
 }
 
 struct RenderArgs {
-  std::string input, output, eye, target;
+  std::string input, output, eye, target, up, view;
   int width = 1024, height = 768;
   float fov = 40.0f;
   bool wireframe = false, flat = false, ramp = false;
 };
 
+std::string xyz(const glm::vec3& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%g,%g,%g", double(v.x), double(v.y), double(v.z));
+  return buf;
+}
+
 int cmd_render(const RenderArgs& a) {
   if (a.output.empty()) throw InvalidInput("render: -o must end in .png");
   require_png(a.output, "render", "-o");
   refuse_same_file(a.input, "the input mesh", a.output, "-o");
+  if (!a.view.empty() && !a.eye.empty()) throw InvalidInput("render: --view and --eye both place the eye; give one of them");
+  check_picture_axes(a.up, a.view);
+  const glm::vec3 up = a.up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_vec3(a.up, "--up");
   const TriMesh mesh = read_input_mesh(a.input);
   const float aspect = float(a.width) / float(a.height);
-  Camera cam = default_camera_for(mesh, aspect);
+  // The default 3/4 view, or (--up, --view) the framing of query's and subdiv's pictures.
+  Camera cam = a.up.empty() && a.view.empty()
+                   ? default_camera_for(mesh, aspect)
+                   : picture_camera_for(mesh, up, a.view.empty() ? glm::vec3(0.0f) : parse_vec3(a.view, "--view"), aspect);
+  if (a.eye.empty()) {
+    // The framing is kept under --fov: the eye moves along the view so that the picture holds the same.
+    const double grow = std::tan(glm::radians(0.5 * double(cam.fov_y_deg))) / std::tan(glm::radians(0.5 * double(a.fov)));
+    const glm::dvec3 t(cam.target), e(cam.eye);
+    cam.eye = glm::vec3(t + (e - t) * grow);
+    cam.z_near = static_cast<float>(double(cam.z_near) * grow);
+    cam.z_far = static_cast<float>(double(cam.z_far) * grow);
+  }
   if (!a.eye.empty()) cam.eye = parse_vec3(a.eye, "--eye");
   if (!a.target.empty()) cam.target = parse_vec3(a.target, "--target");
+  if (!a.up.empty()) cam.up = up;
   cam.fov_y_deg = a.fov;
   if (!a.eye.empty() || !a.target.empty()) {
     // Near and far planes around the mesh's bounding sphere seen from the eye (they were measured from the
@@ -647,8 +683,16 @@ int cmd_render(const RenderArgs& a) {
   o.wireframe = a.wireframe;
   o.smooth = !a.flat;
   o.height_ramp = a.ramp;
-  write_png(a.output, render_mesh(mesh, cam, o));
-  std::printf("rendered %zu triangles -> %s\n", mesh.num_faces(), a.output.c_str());
+  const Image picture = render_mesh(mesh, cam, o);
+  // A camera that sees none of the mesh (a --target or --eye away from it) gave a white picture and
+  // "rendered N triangles": refused, nothing written.
+  const std::size_t drawn = pixels_unlike(picture, o.background);
+  if (drawn == 0)
+    throw InvalidInput("render: the camera sees none of the mesh (eye " + xyz(cam.eye) + ", target " + xyz(cam.target) +
+                       "): the picture would be empty; nothing was written");
+  write_png(a.output, picture);
+  std::printf("rendered %zu triangles -> %s (%.1f %% of the pixels show the mesh)\n", mesh.num_faces(), a.output.c_str(),
+              100.0 * double(drawn) / double(picture.width * picture.height));
   return 0;
 }
 
@@ -684,11 +728,13 @@ int run(int argc, char** argv) {
   auto* render = app.add_subcommand("render", "Render a mesh to a PNG with a small software rasterizer");
   render->add_option("MESH", ra.input, "mesh file")->required();
   render->add_option("-o,--output", ra.output, "output .png")->required();
-  render->add_option("--width", ra.width, "image width in pixels")->check(CLI::Range(1, 16384));
-  render->add_option("--height", ra.height, "image height in pixels")->check(CLI::Range(1, 16384));
+  render->add_option("--width", ra.width, "image width in pixels (default 1024)")->check(CLI::Range(1, 16384));
+  render->add_option("--height", ra.height, "image height in pixels (default 768)")->check(CLI::Range(1, 16384));
   render->add_option("--eye", ra.eye, "camera position x,y,z (default: a 3/4 view)")->check(check_not_empty);
   render->add_option("--target", ra.target, "camera target x,y,z (default: the bounding sphere centre)")->check(check_not_empty);
-  render->add_option("--fov", ra.fov, "vertical field of view in degrees")->check(CLI::Range(1.0, 170.0));
+  render->add_option("--fov", ra.fov, "vertical field of view in degrees (default 40; without --eye the mesh stays framed)")->check(CLI::Range(1.0, 170.0));
+  render->add_option("--up", ra.up, "the direction that is up in the picture, x,y,z (default 0,0,1; e.g. 0,1,0 for y-up models)")->check(check_not_empty);
+  render->add_option("--view", ra.view, "look from this direction (towards the eye), x,y,z, framing the mesh (instead of --eye)")->check(check_not_empty);
   render->add_flag("--wireframe", ra.wireframe, "draw edges");
   render->add_flag("--flat", ra.flat, "flat shading");
   render->add_flag("--height-ramp", ra.ramp, "colour by height (terrains)");
@@ -729,6 +775,28 @@ int run(int argc, char** argv) {
   auto* compare = app.add_subcommand("compare", "Kim-Lee Table 2: three selective refinement schemes on image, terrain and 3D models, table + PNG");
   add_compare_options(*compare, ca);
 
+  // A misspelt command ("varmesh biuld", "varmesh pm qeury"): CLI11 says only that a subcommand is
+  // required. Name the word and the commands known there.
+  {
+    const CLI::App* at = &app;
+    for (int i = 1; i < argc && !at->get_subcommands({}).empty(); ++i) {
+      const std::string word = argv[i];
+      if (word.empty() || word[0] == '-') continue;  // --help, --version
+      const CLI::App* next = nullptr;
+      std::string known;
+      for (const CLI::App* sub : at->get_subcommands({})) {
+        if (sub->get_name() == word) next = sub;
+        known += (known.empty() ? "" : ", ") + sub->get_name();
+      }
+      if (!next) {
+        const std::string where = at == &app ? "varmesh" : "varmesh " + at->get_name();
+        std::fprintf(stderr, "varmesh: error: '%s' is not a command of %s (known: %s; see --help)\n", word.c_str(),
+                     where.c_str(), known.c_str());
+        return 1;
+      }
+      at = next;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -458,6 +458,7 @@ Image render_mesh(const TriMesh& input, const Camera& camera, const RenderOption
                                                                    safe_normalize(eye - mesh.positions[v])));
   }
 
+  const glm::vec3 flat_light = safe_normalize(eye - cam.target);  // flat shading: a directional head light
   std::vector<FaceId> drawn;  // faces whose edges the wireframe draws
   const std::size_t nf = mesh.num_faces();
   for (std::size_t f = 0; f < nf; ++f) {
@@ -484,9 +485,10 @@ Image render_mesh(const TriMesh& input, const Camera& camera, const RenderOption
     if (options.smooth) {
       for (int k = 0; k < 3; ++k) c[k] *= shade[i[k]];
     } else {
-      const glm::vec3 centroid = (p0 + mesh.positions[i[1]] + mesh.positions[i[2]]) / 3.0f;
+      // One light direction for the whole picture (the view direction): lit from the eye towards each
+      // face's centroid, two coplanar faces got two shades and showed the diagonal between them.
       const glm::vec3 unit_fn(glm::normalize(fn));  // fn != 0 (side != 0)
-      const float s = kAmbient + (1.0f - kAmbient) * std::abs(glm::dot(unit_fn, safe_normalize(eye - centroid)));
+      const float s = kAmbient + (1.0f - kAmbient) * std::abs(glm::dot(unit_fn, flat_light));
       for (auto& ck : c) ck *= s;
     }
     if (!front)
@@ -578,6 +580,15 @@ Camera default_camera_for(const TriMesh& mesh, float aspect) {
   return frame_sphere(center, radius, -to_eye, 40.0f, aspect);
 }
 
+
+std::size_t pixels_unlike(const Image& picture, const glm::vec3& background) {
+  if (picture.bit_depth != 8 || picture.channels != 3) throw InvalidInput("pixels_unlike: not an 8-bit RGB picture");
+  const std::uint8_t bg[3] = {to_byte(background.x), to_byte(background.y), to_byte(background.z)};
+  std::size_t n = 0;
+  for (std::size_t i = 0; i + 2 < picture.pixels.size(); i += 3)
+    n += picture.pixels[i] != bg[0] || picture.pixels[i + 1] != bg[1] || picture.pixels[i + 2] != bg[2];
+  return n;
+}
 
 Camera picture_camera_for(const TriMesh& reference, const glm::vec3& up, const glm::vec3& view, float aspect) {
   Box3 box;

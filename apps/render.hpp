@@ -23,7 +23,8 @@
 namespace varmesh {
 
 /// Colour priority per face: face_colors, then height_ramp, then mesh.colors, then base_color. The colour
-/// is multiplied by ambient + diffuse * |n . l| with l pointing to the eye; back faces are darker.
+/// is multiplied by ambient + diffuse * |n . l| with l pointing to the eye (smooth: from each vertex; flat:
+/// the view direction, one for the picture, so coplanar faces get one shade); back faces are darker.
 struct RenderOptions {
   int width = 800;   ///< pixels, 1..16384
   int height = 600;  ///< pixels, 1..16384
@@ -57,6 +58,10 @@ struct Segment3 {
 /// eye == target, up parallel to the view direction, non-finite values) or if mesh.validate() fails.
 Image render_mesh(const TriMesh& mesh, const Camera& camera, const RenderOptions& options,
                   const std::vector<Segment3>& overlay = {});
+
+/// The number of pixels of an 8-bit RGB picture of render_mesh() that differ from `background` (as
+/// render_mesh() writes it): 0 when the camera saw nothing of the mesh.
+std::size_t pixels_unlike(const Image& picture, const glm::vec3& background);
 
 /// A camera that frames the mesh's bounding sphere from a pleasant 3/4 view above (z up): the eye is in
 /// front (-y) and to the right (+x) of the centre, 25 degrees above the horizon, or 40 degrees when the

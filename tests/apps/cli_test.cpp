@@ -300,3 +300,132 @@ TEST(Cli, BuildRefusesOptionsThatDoNotApply) {
 
 }  // namespace
 }  // namespace varmesh
+
+namespace varmesh {
+namespace {
+
+// A box 1 x 4 x 0.5 (long along y), closed, outward faces.
+TriMesh tall_box() {
+  TriMesh m;
+  const glm::vec3 lo(0.0f), hi(1.0f, 4.0f, 0.5f);
+  for (int i = 0; i < 8; ++i) m.positions.push_back({i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z});
+  m.indices = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  return m;
+}
+
+// The rectangle of the picture's pixels that are not the white background.
+struct Extent {
+  std::size_t x0 = SIZE_MAX, y0 = SIZE_MAX, x1 = 0, y1 = 0, count = 0;
+};
+Extent drawn_extent(const Image& im) {
+  Extent e;
+  for (std::size_t y = 0; y < im.height; ++y)
+    for (std::size_t x = 0; x < im.width; ++x) {
+      const std::uint8_t* p = &im.pixels[(y * im.width + x) * 3];
+      if (p[0] == 255 && p[1] == 255 && p[2] == 255) continue;
+      e.x0 = std::min(e.x0, x), e.y0 = std::min(e.y0, y), e.x1 = std::max(e.x1, x), e.y1 = std::max(e.y1, y);
+      ++e.count;
+    }
+  return e;
+}
+
+// render --up keeps the given axis up in the picture (a y-up model used to lie on its side), --view looks
+// from the given side, --fov without --eye keeps the mesh framed, and --view with --eye is refused.
+TEST(CliRender, UpViewAndFovFrameTheMesh) {
+  const auto dir = testing::scratch_dir("cli_render_up");
+  const std::string box = (dir / "box.obj").string();
+  write_mesh(box, tall_box());
+  auto picture = [&](const std::string& args) {
+    const std::string out = (dir / "p.png").string();
+    fs::remove(out);
+    const CmdResult r = run("render " + box + " -o " + out + " --width 400 --height 400 " + args, dir);
+    EXPECT_EQ(r.status, 0) << args << "\n" << r.err;
+    return r.status == 0 ? drawn_extent(read_png(out)) : Extent{};
+  };
+  // Seen from +z with y up, the box's long side (y) is vertical; with x up, horizontal.
+  const Extent y_up = picture("--up 0,1,0 --view 0,0,1");
+  const Extent x_up = picture("--up 1,0,0 --view 0,0,1");
+  ASSERT_GT(y_up.count, 0u);
+  ASSERT_GT(x_up.count, 0u);
+  EXPECT_GT(y_up.y1 - y_up.y0, 3 * (y_up.x1 - y_up.x0)) << "y up: the long side should be vertical";
+  EXPECT_GT(x_up.x1 - x_up.x0, 3 * (x_up.y1 - x_up.y0)) << "x up: the long side should be horizontal";
+  // --fov alone keeps the framing (the eye moves back or forth): the covered area stays about the same.
+  const Extent wide = picture(""), narrow = picture("--fov 15");
+  ASSERT_GT(wide.count, 0u);
+  EXPECT_NEAR(double(narrow.count) / double(wide.count), 1.0, 0.15);
+  const CmdResult r = run("render " + box + " -o " + (dir / "q.png").string() + " --view 1,0,0 --eye 5,5,5", dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(testing::contains(r.err, "--view and --eye")) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "q.png"));
+}
+
+// A camera that sees none of the mesh used to write a white picture and report success.
+TEST(CliRender, ACameraThatSeesNothingIsRefused) {
+  const auto dir = testing::scratch_dir("cli_render_blank");
+  const std::string box = (dir / "box.obj").string();
+  write_mesh(box, tall_box());
+  const CmdResult r = run("render " + box + " -o " + (dir / "p.png").string() + " --target 100,100,100", dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(testing::contains(r.err, "sees none of the mesh")) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "p.png"));
+}
+
+// An output in a folder that does not exist is refused before the work (it was found when the result was
+// written), naming the folder; nothing is printed on stdout.
+TEST(CliOutputs, AMissingFolderIsRefusedBeforeTheWork) {
+  const auto dir = testing::scratch_dir("cli_missing_folder");
+  const std::string box = (dir / "box.obj").string();
+  write_mesh(box, tall_box());
+  const fs::path field = dir / "t.f32";
+  write_heightfield_raw(field.string(), make_fractal_terrain(17, 17, 7, 20.0f));
+  const std::string missing = (dir / "nothere").string();
+  for (const std::string& args :
+       {"pm build " + box + " -o " + missing + "/x.vmh", "build " + box + " --levels 1 -o " + missing + "/x.vrm",
+        "render " + box + " -o " + missing + "/x.png", "subdiv " + box + " --levels 1 -o " + missing + "/x.obj",
+        "terrain " + field.string() + " --raw-size 17,17 --error 1 -o " + missing + "/x.obj",
+        "terrain " + field.string() + " --raw-size 17,17 --error 1 -o " + (dir / "ok.obj").string() + " --png " + missing + "/x.png"}) {
+    const CmdResult r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_TRUE(testing::contains(r.err, "folder '" + missing + "' does not exist")) << args << "\n" << r.err;
+    EXPECT_EQ(r.out, "") << args;
+  }
+  EXPECT_FALSE(fs::exists(missing));
+  EXPECT_FALSE(fs::exists(dir / "ok.obj"));
+}
+
+// terrain --budget N alone (as query and pm query take it): the finest mesh the budget allows.
+TEST(CliTerrain, BudgetAloneIsAQuery) {
+  const auto dir = testing::scratch_dir("cli_terrain_budget");
+  const fs::path field = dir / "t.f32";
+  write_heightfield_raw(field.string(), make_fractal_terrain(65, 65, 7, 20.0f));
+  const std::string out = (dir / "b.obj").string();
+  for (const std::size_t budget : {50u, 500u, 2000u}) {
+    const CmdResult r = run("terrain " + field.string() + " --raw-size 65,65 --budget " + std::to_string(budget) + " -o " + out, dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::size_t faces = read_mesh(out).num_faces();
+    EXPECT_LE(faces, budget);
+    EXPECT_GT(faces, budget / 2) << "the budget, not a criterion, should stop the refinement";
+  }
+  const CmdResult r = run("terrain " + field.string() + " --raw-size 65,65 -o " + out, dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(testing::contains(r.err, "--budget N")) << r.err;
+}
+
+// A misspelt command is named, with the commands known at that level.
+TEST(Cli, AnUnknownCommandIsNamed) {
+  const auto dir = testing::scratch_dir("cli_unknown_command");
+  CmdResult r = run("biuld x.obj -o y.vrm", dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_TRUE(testing::contains(r.err, "'biuld' is not a command of varmesh") && testing::contains(r.err, "build")) << r.err;
+  r = run("pm qeury x.vmh", dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(testing::contains(r.err, "'qeury' is not a command of varmesh pm (known: build, query")) << r.err;
+  r = run("pm --help", dir);
+  EXPECT_EQ(r.status, 0);
+}
+
+}  // namespace
+}  // namespace varmesh

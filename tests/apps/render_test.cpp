@@ -14,6 +14,8 @@
 #include <glm/vec4.hpp>
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include "multitri/errors.hpp"
 #include "multitri/image.hpp"
 #include "multitri/mesh_io.hpp"
@@ -338,6 +340,24 @@ TEST(RenderDepth, NearTriangleHidesFarOneWhateverTheDrawOrder) {
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) blue += pixel(a, x, y).b > 0 ? 1 : 0;
   EXPECT_GT(blue, 50);  // the far triangle shows where the near one does not cover it
+}
+
+// Flat shading lights every face from one direction (the view's): the faces of a plane seen up close and
+// at an angle get one shade. Lit from the eye towards each centroid, they got many, and the diagonals of
+// a quad mesh showed.
+TEST(RenderFaces, FlatShadingGivesCoplanarFacesOneShade) {
+  const TriMesh grid = jiggled_grid(8, 1.0f);
+  Camera cam = front_camera(1.5f);
+  cam.eye = {0.9f, -1.2f, 0.7f};
+  RenderOptions o = black_background();
+  o.smooth = false;
+  const Image im = render_mesh(grid, cam, o);
+  std::set<std::array<std::uint8_t, 3>> shades;
+  for (std::size_t i = 0; i + 2 < im.pixels.size(); i += 3)
+    if (im.pixels[i] + im.pixels[i + 1] + im.pixels[i + 2] > 0) shades.insert({im.pixels[i], im.pixels[i + 1], im.pixels[i + 2]});
+  EXPECT_GT(count_non_black(im), std::size_t{kW * kH / 10});
+  EXPECT_EQ(shades.size(), 1u);
+  EXPECT_EQ(pixels_unlike(im, o.background), count_non_black(im));
 }
 
 TEST(RenderFaces, BackFacesCulledWhenOneSidedAndDarkerWhenTwoSided) {
