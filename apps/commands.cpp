@@ -526,6 +526,7 @@ struct TerrainArgs {
   float spacing = 1.0f;
   std::string raw_size;
   bool terrain_rgb = false;
+  bool flip_rows = false;
   bool fast_bound = false;
   bool measure = false;
   bool quiet = false;
@@ -558,7 +559,12 @@ int cmd_terrain(const TerrainArgs& a) {
     if (!(a.pixels > 0.0f) || !std::isfinite(a.pixels) || !(a.viewport > 0.0f) || !std::isfinite(a.viewport))
       throw InvalidInput("terrain: --pixels and --viewport must be finite and > 0");
   }
-  const HeightField field = read_checked_heightfield(a.input, ro, a.spacing);
+  HeightField field = read_checked_heightfield(a.input, ro, a.spacing);
+  if (a.flip_rows)  // the file's first row at the largest y: a north-up map reads right from above, z up
+    for (std::size_t r = 0; r < field.height / 2; ++r)
+      std::swap_ranges(field.z.begin() + static_cast<std::ptrdiff_t>(r * field.width),
+                       field.z.begin() + static_cast<std::ptrdiff_t>((r + 1) * field.width),
+                       field.z.begin() + static_cast<std::ptrdiff_t>((field.height - 1 - r) * field.width));
   Grid48Options go;
   go.exact_errors = !a.fast_bound;
   Stopwatch build_watch;
@@ -720,6 +726,7 @@ int run(int argc, char** argv) {
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");
   terrain->add_option("--raw-size", ta.raw_size, "W,H of a .raw/.f32 file")->check(check_not_empty);
   terrain->add_flag("--terrain-rgb", ta.terrain_rgb, "decode a Mapbox Terrain-RGB PNG");
+  terrain->add_flag("--flip-rows", ta.flip_rows, "put the file's first row at the largest y (a north-up map then reads right from above, z up; default: row r at y = r * spacing)");
   terrain->add_flag("--fast-bound", ta.fast_bound, "looser O(1)-per-node error bounds instead of exact errors (more triangles for the same threshold)");
   terrain->add_flag("--measure", ta.measure, "measure the true max vertical error of the result over all samples");
   terrain->add_option("--png", ta.png, "also render the result to this PNG")->check(check_file_name);

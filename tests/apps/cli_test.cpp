@@ -429,3 +429,35 @@ TEST(Cli, AnUnknownCommandIsNamed) {
 
 }  // namespace
 }  // namespace varmesh
+
+namespace varmesh {
+namespace {
+
+// --flip-rows puts the file's first row at the largest y: a peak in the first row lands at y = 0 without
+// it and at y = (rows - 1) * spacing with it; the heights are the file's either way.
+TEST(CliTerrain, FlipRowsPutsTheFirstRowAtTheLargestY) {
+  const auto dir = testing::scratch_dir("cli_terrain_flip");
+  HeightField f;
+  f.width = 9;
+  f.height = 5;
+  f.z.assign(f.width * f.height, 0.0f);
+  f.z[2] = 7.0f;  // row 0, column 2
+  const fs::path field = dir / "t.f32";
+  write_heightfield_raw(field.string(), f);
+  for (const bool flip : {false, true}) {
+    const std::string out = (dir / "m.obj").string();
+    const CmdResult r = run("terrain " + field.string() + " --raw-size 9,5 --error 0 --spacing 2 -o " + out +
+                                (flip ? " --flip-rows" : ""), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const TriMesh m = read_mesh(out);
+    glm::vec3 top(0.0f, 0.0f, -1.0f);
+    for (const glm::vec3& p : m.positions)
+      if (p.z > top.z) top = p;
+    EXPECT_FLOAT_EQ(top.z, 7.0f);
+    EXPECT_FLOAT_EQ(top.x, 4.0f);
+    EXPECT_FLOAT_EQ(top.y, flip ? 8.0f : 0.0f) << (flip ? "--flip-rows" : "default");
+  }
+}
+
+}  // namespace
+}  // namespace varmesh
