@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <optional>
 #include <sstream>
@@ -284,7 +285,8 @@ struct Options {
   bool data_present = false;
   std::string data_note;
   // Debian libcgal-demo's archive of sample data, which holds a cow and a bunny: the models' stand-ins when
-  // the data folder lacks them ($VARMESH_PACKAGED_MESHES overrides the path; tests point it elsewhere).
+  // the data folder lacks them ($VARMESH_PACKAGED_MESHES overrides the path; empty: none, the generated
+  // stand-ins).
   fs::path packaged;
   std::string image;
   double feature_fraction = 0.05;
@@ -310,6 +312,25 @@ long parse_integer(const std::string& text, const char* option, long lo, long hi
   if (v != std::floor(v) || v < static_cast<float>(lo) || v > static_cast<float>(hi))
     throw InvalidInput(std::string(option) + ": '" + text + "' must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
   return static_cast<long>(v);
+}
+
+// The archive of packaged meshes: $VARMESH_PACKAGED_MESHES when set and not empty, else kPackagedMeshes
+// (used when it is there). "none" asks for no archive (the generated stand-ins; the tests use it). A path
+// the user set must name a readable file: a wrong one fell back silently to the generated inputs. Returns
+// the empty path for none.
+fs::path packaged_archive() {
+  const char* env = std::getenv("VARMESH_PACKAGED_MESHES");
+  if (env == nullptr || *env == '\0') return kPackagedMeshes;
+  const std::string path = env;
+  if (path == "none") return {};
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw InvalidInput("VARMESH_PACKAGED_MESHES: '" + path + "' is a folder, not an archive (.tar.gz)");
+  if (!fs::is_regular_file(path, ec))
+    throw InvalidInput("VARMESH_PACKAGED_MESHES: '" + path + "' is not a file (set it to an archive such as " +
+                       kPackagedMeshes + ", or to none for no packaged meshes)");
+  if (!std::ifstream(path, std::ios::binary))
+    throw InvalidInput("VARMESH_PACKAGED_MESHES: '" + path + "' cannot be read");
+  return path;
 }
 
 Options parse_options(const CompareArgs& a) {
@@ -353,15 +374,19 @@ Options parse_options(const CompareArgs& a) {
     if (!fs::is_directory(a.data_dir)) throw InvalidInput("--data: '" + a.data_dir + "' is not a folder");
     o.data = a.data_dir;
     o.data_present = true;
+  } else if (const char* env = std::getenv("VARMESH_DATA"); env && *env) {
+    // Set by the user: a folder that is not there is an error, as with --data (it fell back silently to the
+    // packaged or generated inputs).
+    if (!fs::is_directory(env)) throw InvalidInput("VARMESH_DATA: '" + std::string(env) + "' is not a folder");
+    o.data = env;
+    o.data_present = true;
   } else {
-    const char* env = std::getenv("VARMESH_DATA");
-    o.data = (env && *env) ? fs::path(env) : fs::path("../shared/data");
+    o.data = "../shared/data";
     o.data_present = fs::is_directory(o.data);
     if (!o.data_present)
       o.data_note = "data folder " + o.data.string() + " not found (set --data or VARMESH_DATA): packaged or generated inputs are used";
   }
-  const char* packaged = std::getenv("VARMESH_PACKAGED_MESHES");
-  o.packaged = (packaged && *packaged) ? fs::path(packaged) : fs::path(kPackagedMeshes);
+  o.packaged = packaged_archive();
   return o;
 }
 
@@ -479,7 +504,7 @@ struct ModelSpec {
 std::optional<TriMesh> packaged_model(const Options& o, const std::string& name, std::string& source) {
   const char* member = name == "cow" ? "data/meshes/cow.off" : name == "bunny" ? "data/meshes/bunny00.off" : nullptr;
   std::error_code ec;
-  if (member == nullptr || !fs::is_regular_file(o.packaged, ec)) return std::nullopt;
+  if (member == nullptr || o.packaged.empty() || !fs::is_regular_file(o.packaged, ec)) return std::nullopt;
   std::optional<std::string> data = read_tar_member(o.packaged.string(), member, std::uint64_t{64} << 20);
   if (!data) return std::nullopt;
   TriMesh mesh = read_input_mesh_data(o.packaged.string() + ":" + member, *data);
@@ -937,7 +962,9 @@ void write_text(const Options& o, const std::string& name, const std::string& te
 void add_compare_options(CLI::App& sub, CompareArgs& args) {
   sub.add_option("--out", args.out_dir, "output folder (default varmesh_compare)");
   sub.add_option("--cases", args.cases, "comma-separated cases: image,terrain,bunny,cow,dragon (default all)");
-  sub.add_option("--data", args.data_dir, "data folder (default $VARMESH_DATA, else ../shared/data; missing files are generated)");
+  sub.add_option("--data", args.data_dir,
+                 "data folder (default $VARMESH_DATA, else ../shared/data; missing files are taken from the packaged "
+                 "meshes or generated)");
   sub.add_option("--image", args.image, "image for the image case (PNG or PGM; default images/peppers_256_gray.png)")
       ->check(check_file_name);
   sub.add_option("--features", args.feature_fraction, "fraction of pixels kept as Sobel feature points (default 0.05)")->type_name("FRACTION");
@@ -949,6 +976,15 @@ void add_compare_options(CLI::App& sub, CompareArgs& args) {
       ->type_name("KIND");
   sub.add_flag("--quick", args.quick, "small inputs (64 x 64 grids, small model files): a fast run");
   sub.add_flag("--quiet", args.quiet, "no progress on stderr");
+  sub.footer(
+      "Environment:\n"
+      "  VARMESH_DATA             the data folder when --data is not given (default ../shared/data, used when it is "
+      "there)\n"
+      "  VARMESH_PACKAGED_MESHES  the archive of the packaged cow and bunny, used when the data folder lacks them "
+      "(default /usr/share/doc/libcgal-dev/data.tar.gz, used when it is there); none: no packaged meshes (generated "
+      "stand-ins)\n"
+      "  A variable that is set (not empty) must name an existing folder (VARMESH_DATA) or a readable file: "
+      "anything else is an error, as with --data.");
 }
 
 static int run_compare_in(const Options& o);

@@ -10,7 +10,8 @@
 // It prints the table (#V, #F, #DC, forced vsplits and ecols, time), checks kim-lee <= hoppe97 <=
 // xia-varshney in #V and #F per case, and writes table.md, table.csv, compare_notes.md and PNG pictures
 // (<case>_schemes.png side by side, <case>_dual_pieces.png, image_features.png) into the output folder.
-// Missing data files are replaced by generated inputs (said in the output), so the command always runs.
+// Missing data files are replaced by packaged or generated inputs (said in the output), so the command runs
+// without the data folder; an environment variable that names nothing is an error (run_compare).
 #include <string>
 
 namespace CLI { class App; }
@@ -20,7 +21,9 @@ namespace varmesh::app {
 struct CompareArgs {
   std::string out_dir = "varmesh_compare";
   std::string cases = "image,terrain,bunny,cow,dragon";
-  /// Data folder; empty: $VARMESH_DATA, else ../shared/data (relative to the working directory).
+  /// Data folder; empty: $VARMESH_DATA when set (it must then name a folder), else ../shared/data (relative
+  /// to the working directory, used when it is there). $VARMESH_PACKAGED_MESHES names the archive of the
+  /// packaged cow and bunny ("none": no archive); when set, it must name a readable file.
   std::string data_dir;
   std::string image;                     ///< image file for the image case (default: images/peppers_256_gray.png)
   std::string feature_fraction = "0.05"; ///< fraction of pixels kept as Sobel feature points, in (0, 1]
@@ -38,8 +41,9 @@ void add_compare_options(CLI::App& sub, CompareArgs& args);
 /// Runs it; returns the process exit status: 0, or 3 when a mesh fails SrMesh::validate() or the kim-lee or
 /// hoppe97 result misses a required vertex (a xia-varshney dependency cycle that leaves some out is reported
 /// in the "missing" row and compare_notes.md, not as a failure). The expected ordering failing is reported,
-/// not a failure either. Throws InvalidInput on bad options and IoError on unreadable files (the caller
-/// prints); nothing is written before the options are checked.
+/// not a failure either. Throws InvalidInput on bad options (and on $VARMESH_DATA or $VARMESH_PACKAGED_MESHES
+/// set to something that is not there) and IoError on unreadable files (the caller prints); nothing is
+/// written before the options are checked.
 int run_compare(const CompareArgs& args);
 
 }  // namespace varmesh::app
