@@ -4,11 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <optional>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,10 +49,22 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
                  "0.0685, saddle 0.002, implicit-torus 0.046, the paper's figures)")
       ->check(check_positive);
   sub.add_option("--raw-size", a.raw_size, "adaptive on a .raw float32 height field: W,H")->check(check_not_empty);
+  sub.add_option("--max-triangles", a.max_triangles,
+                 "semiregular: refuse, before the build, a hierarchy whose finest mesh would have more faces than "
+                 "this (base faces x 2^levels; default 2^22 = 4194304, about 1 GB and 10 s; at most 2^31)")
+      ->option_text("N")
+      ->each([&a](const std::string&) { a.max_triangles_given = true; });
   auto* pictures = sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder")
                        ->check(check_file_name);
-  sub.add_option("--up", a.up, "with --pictures: x,y,z up axis (default 0,0,1)")->check(check_not_empty)->needs(pictures);
-  sub.add_option("--view", a.view, "with --pictures: x,y,z direction from the model towards the eye")->check(check_not_empty)->needs(pictures);
+  // The option text replaces CLI11's "TEXT Needs: --pictures", which ran into the description.
+  sub.add_option("--up", a.up, "with --pictures: x,y,z up axis (default 0,0,1)")
+      ->option_text("X,Y,Z")
+      ->check(check_not_empty)
+      ->needs(pictures);
+  sub.add_option("--view", a.view, "with --pictures: x,y,z direction from the model towards the eye")
+      ->option_text("X,Y,Z")
+      ->check(check_not_empty)
+      ->needs(pictures);
   sub.add_flag("--quiet", a.quiet, "no progress on stderr");
 }
 
@@ -63,12 +76,22 @@ void add_view_query_options(CLI::App& sub, ViewQueryArgs& a, const char* hierarc
   sub.add_option("--error", a.error, "largest node error allowed (object units)")->check(check_non_negative);
   auto* camera = sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error")
                      ->check(check_not_empty);
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(camera);
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(camera);
+  // Option texts instead of CLI11's "FLOAT Needs: --camera", which ran into the descriptions.
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")
+      ->option_text("PIXELS")
+      ->check(check_positive)
+      ->needs(camera);
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")
+      ->option_text("PIXELS")
+      ->check(check_positive)
+      ->needs(camera);
   sub.add_option("--budget", a.budget, "triangle budget")->check(check_count);
   auto* png = sub.add_option("--png", a.png, "also render the result to this PNG")->check(check_file_name);
-  sub.add_option("--up", a.up, "with --png: x,y,z up axis (default 0,0,1)")->check(check_not_empty)->needs(png);
-  sub.add_option("--view", a.view, "with --png: x,y,z direction from the model towards the eye")->check(check_not_empty)->needs(png);
+  sub.add_option("--up", a.up, "with --png: x,y,z up axis (default 0,0,1)")->option_text("X,Y,Z")->check(check_not_empty)->needs(png);
+  sub.add_option("--view", a.view, "with --png: x,y,z direction from the model towards the eye")
+      ->option_text("X,Y,Z")
+      ->check(check_not_empty)
+      ->needs(png);
 }
 
 }  // namespace
@@ -155,26 +178,45 @@ void print_metrics(const Mt& mt, bool semiregular = false) {
   }
 }
 
+// The magics of the two hierarchy files (pm/hierarchy_io.cpp, multitri/mt_io.cpp).
+const std::string kVmhMagic = "VMPMHIER";
+const std::string kVrmMagic("VMSHMT\r\n", 8);
+
+// The first 8 bytes of `path`; 8 zero bytes when it cannot be opened or is shorter.
+std::string file_magic(const std::string& path) {
+  char magic[8] = {};
+  std::ifstream in(path, std::ios::binary);
+  if (!in || !in.read(magic, sizeof magic)) std::fill(std::begin(magic), std::end(magic), '\0');
+  return std::string(magic, sizeof magic);
+}
+
+// query and pm query read one kind of hierarchy each: the other kind is named, with the command that reads
+// it (the loaders said only "bad magic").
+void refuse_other_hierarchy(const std::string& path, bool pm) {
+  const std::string m = file_magic(path);
+  if (!pm && m == kVmhMagic)
+    throw IoError(path, "a progressive-mesh vertex hierarchy (.vmh, from varmesh pm build), not a Multi-Triangulation "
+                        "(.vrm): use varmesh pm query");
+  if (pm && m == kVrmMagic)
+    throw IoError(path, "a Multi-Triangulation (.vrm, from varmesh build), not a progressive-mesh vertex hierarchy "
+                        "(.vmh): use varmesh query");
+}
+
 // `varmesh info` on a hierarchy file, told by its magic (not its extension).
 bool hierarchy_info(const std::string& path) {
   // The magic decides; a file too short for one (or unreadable) is a hierarchy file when its extension
   // says so, and then the loader names the problem (truncated, cannot open).
-  char magic[8] = {};
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (!in || !in.read(magic, sizeof magic)) std::fill(std::begin(magic), std::end(magic), '\0');
-  }
-  std::string m(magic, sizeof magic);
+  std::string m = file_magic(path);
   const std::string ext = std::filesystem::path(path).extension().string();
-  if (m != "VMPMHIER" && m != std::string("VMSHMT\r\n", 8)) {
+  if (m != kVmhMagic && m != kVrmMagic) {
     if (m != std::string(8, '\0')) return false;
-    if (ext == ".vmh") m = "VMPMHIER";
+    if (ext == ".vmh") m = kVmhMagic;
     else if (ext != ".vrm") return false;
   }
   std::error_code ec;
   const auto file_bytes = std::filesystem::file_size(path, ec);
   Stopwatch watch;
-  if (m == "VMPMHIER") {
+  if (m == kVmhMagic) {
     const VertexHierarchy h = read_vertex_hierarchy(path);
     const double ms = watch.ms();
     const InputRepairReport& r = h.repair_report();
@@ -195,8 +237,14 @@ bool hierarchy_info(const std::string& path) {
     const double diag = glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo));
     float worst = 0.0f;
     for (Index root : h.roots()) worst = std::max(worst, h.bound(root).error);
-    std::printf("node error of the base mesh, an estimate of its distance to the input (largest root): %.6g (%.2f e-4 of the bounding-box diagonal %.6g)\n",
-                double(worst), diag > 0.0 ? 1e4 * double(worst) / diag : 0.0, diag);
+    // The node error accumulates the collapses' local moves up the tree (qem_analysis.hpp): it errs on the
+    // high side, by far at the coarse levels (the bunny's 21-face base: 149 % of the diagonal, 4.5 times the
+    // largest distance pm build --measure finds), though it is not a strict bound. Printed as e-4 of the
+    // diagonal it read "14876.23 e-4".
+    std::printf("node error of the base mesh (largest root): %.6g = %.3g %% of the bounding-box diagonal %.6g; a "
+                "conservative estimate of the distance to the input (each collapse adds its local move to its children's "
+                "largest error): usually well above the measured distance (pm build --measure), not a strict bound\n",
+                double(worst), diag > 0.0 ? 100.0 * double(worst) / diag : 0.0, diag);
     return true;
   }
   const Mt mt = read_mt(path);
@@ -311,6 +359,27 @@ void check_build_outputs(const BuildArgs& a) {
   check_picture_axes(a.up, a.view);
 }
 
+// The semi-regular build's size, refused before the build when the finest mesh (every base face bisected
+// `levels` times: base faces x 2^levels, the border's lone faces included) would have more than
+// --max-triangles faces. The library refuses only what exceeds 2^31 faces or the machine's memory, and the
+// cow's 5804 faces at --levels 12 (23.8M faces, 6 GB) took a minute to build.
+void check_semiregular_size(const BuildArgs& a, std::size_t base_faces, int levels) {
+  const double limit = double(a.max_triangles);
+  const double finest = std::ldexp(double(base_faces), levels);
+  if (finest <= limit) return;
+  int fits = -1;  // the most levels within the limit
+  while (fits < 64 && std::ldexp(double(base_faces), fits + 1) <= limit) ++fits;
+  const std::string given = a.levels < 0 ? "the default --levels 4" : "--levels " + std::to_string(levels);
+  char count[48];
+  std::snprintf(count, sizeof count, "%.4g", finest);
+  std::string text = "build: " + given + " on the " + std::to_string(base_faces) + " faces of '" + a.input +
+                     "' would make " + count + " faces in the finest mesh (" + std::to_string(base_faces) + " x 2^" +
+                     std::to_string(levels) + "), more than --max-triangles " + std::to_string(a.max_triangles) +
+                     " (about 250 bytes each at the peak): lower --levels";
+  if (fits >= 0) text += " (at most " + std::to_string(fits) + " here)";
+  throw InvalidInput(text + " or raise --max-triangles (at most 2^31)");
+}
+
 // Writes the hierarchy `a.output` and its pictures, all or nothing: the hierarchy goes to a temporary name
 // beside its target, the pictures to a staging folder inside `a.pictures` (StagedFolder), then the pictures
 // are moved into place and the hierarchy renamed last. A failure on the way leaves the output and the folder
@@ -343,6 +412,8 @@ void write_hierarchy_and_pictures(const BuildArgs& a, const Mt& mt, const std::v
 
 int run_build(const BuildArgs& a) {
   if (std::filesystem::path(a.output).extension() != ".vrm") throw InvalidInput("build: -o must end in .vrm, not '" + a.output + "'");
+  if (a.max_triangles == 0 || a.max_triangles > BuildArgs::kHardMaxTriangles)
+    throw InvalidInput("build: --max-triangles must be in 1 .. 2^31, not " + std::to_string(a.max_triangles));
   if (!std::isfinite(a.tolerance)) throw InvalidInput("build: --tolerance must be a finite number");
   if (a.method != "adaptive" && a.method != "semiregular" && a.method != "simplify4k")
     throw InvalidInput("build: unknown --method '" + a.method + "' (semiregular, adaptive, simplify4k)");
@@ -350,6 +421,8 @@ int run_build(const BuildArgs& a) {
     if (a.tolerance > 0.0f) throw InvalidInput("build: --tolerance is for --method adaptive, not " + a.method);
     if (!a.raw_size.empty()) throw InvalidInput("build: --raw-size is for --method adaptive on a .raw height field");
   }
+  if (a.method != "semiregular" && a.max_triangles_given)
+    throw InvalidInput("build: --max-triangles is for --method semiregular (adaptive refines to its --tolerance, simplify4k coarsens)");
   check_build_outputs(a);
   Stopwatch watch;
   Mt mt;
@@ -380,13 +453,18 @@ int run_build(const BuildArgs& a) {
     const TriMesh base = read_input_mesh(a.input);
     SemiRegularInfo info;
     const int levels = a.levels < 0 ? 4 : a.levels;
+    check_semiregular_size(a, base.num_faces(), levels);
     try {
       mt = build_semiregular_mt(base, levels, {}, &info);
     } catch (const InvalidInput& e) {
       throw IoError(a.input, e.what());  // name the file (e.g. "face 18 uses edge (7, 2) already shared ...")
     }
-    std::printf("semiregular: %zu base faces paired into %zu blocks (%zu left over, split 1->2 on the border), %d levels\n",
-                base.num_faces(), info.matching.num_pairs, info.matching.num_leftovers, levels);
+    // The faces left over by the matching are split 1 -> 2 on their own; said only when there are some.
+    const std::string leftovers = info.matching.num_leftovers == 0
+                                      ? std::string()
+                                      : " (" + std::to_string(info.matching.num_leftovers) + " left over, split 1->2 on the border)";
+    std::printf("semiregular: %zu base faces paired into %zu blocks%s, %d levels\n", base.num_faces(),
+                info.matching.num_pairs, leftovers.c_str(), levels);
     if (!a.pictures.empty()) {
       const Camera cam = chosen_camera(base, a.up, a.view);
       MtFront front(mt);
@@ -454,6 +532,7 @@ void print_distance(const char* what, const SurfaceDistance& d, const char* from
 
 int run_query(const QueryArgs& a) {
   check_view_query_outputs(a, "query");
+  refuse_other_hierarchy(a.input, false);
   if (a.error < 0.0f && a.camera.empty() && a.ramp.empty() && a.budget == 0)
     throw InvalidInput("query: give --error E, --camera ..., --ramp ... or --budget N");
   std::vector<Criterion> parts;
@@ -509,6 +588,61 @@ TriMesh input_mesh_of(const VertexHierarchy& h) {
   for (Index c : leaves.indices) m.indices.push_back(dense(to_input[c]));
   return m;
 }
+
+// The connected pieces of the base mesh (union-find over its faces).
+std::size_t base_pieces(const VertexHierarchy& h) {
+  const TriMesh base = mesh_after_collapses(h, h.num_collapses());
+  std::vector<Index> parent(base.num_vertices());
+  for (Index i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [&parent](Index x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (std::size_t f = 0; f < base.num_faces(); ++f)
+    for (int k = 1; k < 3; ++k) parent[find(base.corner(f, k))] = find(base.corner(f, 0));
+  std::vector<std::uint8_t> counted(parent.size(), 0);
+  std::size_t pieces = 0;
+  for (Index c : base.indices) {
+    const Index r = find(c);
+    pieces += counted[r] == 0;
+    counted[r] = 1;
+  }
+  return pieces;
+}
+
+// A --faces or --vertices target that the analysis did not reach, said with why: the collapses left all
+// failed a legality check (QemStats' counts over the whole run say which checks refused how often), and
+// every connected piece keeps at least 4 vertices. (The dragon at --vertices 500 ended at 2469 vertices,
+// exit 0 and no word: its repair had cut it into hundreds of pieces.)
+void print_target_note(const PmBuildArgs& a, const QemStats& st, const VertexHierarchy& h) {
+  std::string target;
+  if (a.vertices > 0 && st.base_vertices > a.vertices)
+    target = "--vertices " + std::to_string(a.vertices) + " not reached: the base mesh has " + std::to_string(st.base_vertices) + " vertices";
+  else if (a.faces > 0 && st.base_faces > a.faces)
+    target = "--faces " + std::to_string(a.faces) + " not reached: the base mesh has " + std::to_string(st.base_faces) + " faces";
+  if (target.empty()) return;
+  std::string why;
+  auto add = [&why](std::size_t n, const std::string& what) {
+    if (n > 0) why += (why.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  };
+  add(st.rejected_error, "were over --max-error");
+  add(st.rejected_link, "failed the link condition");
+  add(st.rejected_flip, "would flip or degenerate a face");
+  add(st.rejected_locked, "touched locked vertices (--non-manifold lock)");
+  add(st.rejected_depth, "hit the depth limit of the hierarchy");
+  std::string text = "note: " + target + "; no collapse left passes the checks";
+  if (!why.empty()) text += " (refused along the way: " + why + ")";
+  const std::size_t pieces = base_pieces(h);
+  if (pieces > 1) {
+    text += "; the base mesh is " + std::to_string(pieces) + " separate pieces";
+    if (h.repair_report().added_vertex_copies > 0)
+      text += " (the repair cut the input at its non-manifold edges and vertices: " +
+              std::to_string(h.repair_report().added_vertex_copies) + " vertex copies)";
+    text += ", and no piece goes below 4 vertices";
+  }
+  std::printf("%s\n", text.c_str());
+}
+
 }  // namespace
 
 int run_pm_build(const PmBuildArgs& a) {
@@ -571,11 +705,13 @@ int run_pm_build(const PmBuildArgs& a) {
     std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,
                 st.collapses, a.lt_finish);
   if (distance) print_distance("base mesh", *distance, "input");
+  print_target_note(a, st, h);
   return 0;
 }
 
 int run_pm_query(const PmQueryArgs& a) {
   check_view_query_outputs(a, "pm query");
+  refuse_other_hierarchy(a.input, true);
   RefinementScheme scheme = RefinementScheme::kKimLee;
   if (a.scheme == "hoppe97") scheme = RefinementScheme::kHoppe97;
   else if (a.scheme == "xia-varshney") scheme = RefinementScheme::kXiaVarshney;

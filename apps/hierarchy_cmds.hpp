@@ -3,6 +3,7 @@
 // any .vrm file by error, camera or a linear ramp of triangle size); `varmesh pm build` / `varmesh pm query`,
 // the same pair for the Kim-Lee progressive-mesh hierarchy (.vmh).
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 namespace CLI { class App; }
@@ -18,7 +19,14 @@ struct BuildArgs {
   std::string raw_size;        ///< adaptive on a .raw height field
   std::string pictures;        ///< folder for PNGs of the levels (semiregular, simplify4k) or the result (adaptive)
   std::string up, view;        ///< pictures: "x,y,z" up axis and direction towards the eye (empty: defaults)
+  /// semiregular: the most faces the finest mesh may have (base faces x 2^levels), checked before the build
+  /// (peak memory about 250 bytes per finest face). 1 .. kHardMaxTriangles.
+  std::uint64_t max_triangles = kDefaultMaxTriangles;
+  bool max_triangles_given = false;  ///< set by the parser (refused with the other methods)
   bool quiet = false;
+
+  static constexpr std::uint64_t kDefaultMaxTriangles = std::uint64_t{1} << 22;
+  static constexpr std::uint64_t kHardMaxTriangles = std::uint64_t{1} << 31;
 };
 /// What `query` and `pm query` share: the hierarchy, the output, the view criteria and the picture.
 struct ViewQueryArgs {

@@ -270,14 +270,16 @@ TEST(Cli, BuildRefusesOptionsThatDoNotApply) {
       {"build " + mesh + " -o " + vrm + " --levels -1", "--levels"},
       {"build saddle --method adaptive -o " + vrm + " --levels 0", "--levels must be in 1..48"},
       {"build saddle --method adaptive -o " + vrm + " --levels 49", "--levels must be in 1..48"},
-      {"build " + mesh + " -o " + vrm + " --levels 40", "would exceed 2^31 faces"},
+      {"build " + mesh + " -o " + vrm + " --levels 40", "would make 4.398e+12 faces in the finest mesh (4 x 2^40), more than --max-triangles 4194304"},
+      {"build " + mesh + " -o " + vrm + " --levels 29 --max-triangles 2147483648", "would exceed 2^31 faces"},
       {"build " + bad_mesh + " -o " + vrm, bad_mesh + ": FourKMesh: face 4"},
       {"build " + bad_mesh + " --method simplify4k -o " + vrm, bad_mesh + ": simplify4k: face"},
       {"terrain " + mesh + " --raw-size 3,3 --error 1 -o " + (dir / "t.obj").string(), "--raw-size is for a .raw or .f32"},
   };
-  // 4 x 2^28 faces stay below 2^31 but need ~280 GB: refused by the library's memory check, naming the file.
+  // 4 x 2^28 faces stay below 2^31 (and --max-triangles 2^31) but need ~280 GB: refused by the library's memory check, naming the file.
   std::vector<Case> all = cases;
-  if (physical_memory_bytes() < 250e9) all.push_back({"build " + mesh + " -o " + vrm + " --levels 28", mesh + ": build_semiregular: parameter levels = 28"});
+  if (physical_memory_bytes() < 250e9)
+    all.push_back({"build " + mesh + " -o " + vrm + " --levels 28 --max-triangles 2147483648", mesh + ": build_semiregular: parameter levels = 28"});
   for (const Case& c : all) {
     const CmdResult r = run(c.args, dir);
     EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
