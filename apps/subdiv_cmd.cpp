@@ -93,13 +93,39 @@ struct Input {
   std::string description;  // how `poly` was made, for the report
 };
 
+// The library refuses a step count that would make 2^32 elements or more, or need more than the machine's
+// memory, as "subdivision: 18 steps would need about 73 GB, more than the 25 GB of memory here (steps)
+// (element 18)": the parameter's name and InvalidInput's element index speak to its callers, and the user
+// read "(steps) (element 18)". Returns that refusal in the command's words; nothing for any other error.
+std::optional<std::string> steps_refusal(const InvalidInput& e) {
+  if (e.element() == InvalidInput::kNoElement) return std::nullopt;
+  const std::string r = e.what();
+  const std::string head = "subdivision: ", tail = " (steps) (element " + std::to_string(e.element()) + ")";
+  if (r.size() < head.size() + tail.size() || r.compare(0, head.size(), head) != 0 ||
+      r.compare(r.size() - tail.size(), tail.size(), tail) != 0)
+    return std::nullopt;
+  return "subdiv: " + r.substr(head.size(), r.size() - head.size() - tail.size()) + ": lower --levels (or --steps)";
+}
+
+// The library's step-count refusal in the command's words; other errors as they are.
+template <class Fn>
+auto refusing_steps(Fn&& fn) {
+  try {
+    return fn();
+  } catch (const InvalidInput& e) {
+    if (const std::optional<std::string> r = steps_refusal(e)) throw InvalidInput(*r);
+    throw;
+  }
+}
+
 // Errors of the library name a vertex or face; say which mesh they are in. (what() already ends with the
-// element, so the new error does not repeat it.)
+// element, so the new error does not repeat it.) A refused step count is not the mesh's fault: said alone.
 template <class Fn>
 auto about(const std::string& what, Fn&& fn) {
   try {
     return fn();
   } catch (const InvalidInput& e) {
+    if (const std::optional<std::string> r = steps_refusal(e)) throw InvalidInput(*r);
     throw InvalidInput(what + ": " + e.what());
   }
 }
@@ -278,7 +304,7 @@ Result run_uniform(const PolyMesh& base, const SchemeInfo& s, int steps, std::ui
   }
   check_size(primal_size(base, steps), s, steps, max_triangles);
   Stopwatch watch;
-  const SubdivMesh m = subdivide(base, primal(s.scheme), steps);
+  const SubdivMesh m = refusing_steps([&] { return subdivide(base, primal(s.scheme), steps); });
   r.ms = watch.ms();
   r.triangles = m.to_tri_mesh();
   r.num_polygons = m.half_step() ? m.topo.num_edges() : m.topo.num_faces;
@@ -472,8 +498,15 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
       ->check(check_non_negative);
   auto* camera = sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error")
                      ->check(check_not_empty);
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(camera);
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(camera);
+  // Option texts instead of CLI11's "FLOAT Needs: --camera", which ran into the descriptions.
+  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")
+      ->option_text("PIXELS")
+      ->check(check_positive)
+      ->needs(camera);
+  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")
+      ->option_text("PIXELS")
+      ->check(check_positive)
+      ->needs(camera);
   sub.add_option("--png", a.png, "also render the result to this PNG (flat shading, polygon edges)")->check(check_file_name);
   sub.add_option("--figure", a.figure,
                  "write every scheme on INPUT into this folder (one PNG each, same camera, plus a grid): "
