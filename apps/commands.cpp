@@ -748,15 +748,7 @@ int run(int argc, char** argv) {
 
   DemoArgs da;
   auto* demo = app.add_subcommand("demo", "Fractal terrain: build, uniform-error and view-dependent meshes, table, OBJ + PNG");
-  demo->add_option("--out", da.out_dir, "output folder (default varmesh_demo)")->check(check_file_name);
-  auto* demo_size = demo->add_option("--size", da.size, "terrain size in samples per side of the generated terrain (default 1025)")->check(CLI::Range(17, 8193));
-  demo->add_option("--error", da.error, "uniform mesh: max vertical error (default 0.5% of the height range)")->check(check_non_negative);
-  demo->add_option("--pixels", da.pixels, "view-dependent mesh: screen-space error in pixels (default 1)")->check(check_positive);
-  auto* demo_field = demo->add_option("--heightfield", da.heightfield, "use this height field instead of the fractal terrain")
-                         ->check(check_file_name)
-                         ->excludes(demo_size);
-  demo->add_option("--raw-size", da.raw_size, "W,H: the size of a headerless .raw/.f32 --heightfield")->check(check_not_empty)->needs(demo_field);
-  demo->add_flag("--quiet", da.quiet, "no progress on stderr");
+  add_demo_options(*demo, da);
 
   BuildArgs ba;
   auto* build = app.add_subcommand("build", "Build a 4-k hierarchy (semiregular, adaptive, simplify4k) and save it as .vrm");
