@@ -48,6 +48,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "multitri/detail/assert.hpp"
 #include "multitri/mt.hpp"
 #include "multitri/tri_mesh.hpp"
 #include "multitri/types.hpp"
@@ -97,24 +98,58 @@ class FourKMesh {
   static constexpr FaceId fbase(HalfEdgeId h) noexcept { return h / 3; }
   static constexpr HalfEdgeId next(HalfEdgeId h) noexcept { return h % 3 == 2 ? h - 2 : h + 1; }
   static constexpr HalfEdgeId prev(HalfEdgeId h) noexcept { return h % 3 == 0 ? h + 2 : h - 1; }
-  /// Origin vertex of h (the paper's Hedge::point).
-  VertexId point(HalfEdgeId h) const noexcept { return point_[h]; }
-  /// End vertex of h.
-  VertexId target(HalfEdgeId h) const noexcept { return point_[next(h)]; }
-  /// The opposite half-edge (see invariants 4 and 5); kInvalid on the border.
-  HalfEdgeId mate(HalfEdgeId h) const noexcept { return mate_[h]; }
+  // The accessors below that take an id are unchecked, as std::vector::operator[] (VARMESH_ASSERT in debug
+  // and sanitizer builds): h < num_half_edges(), f < num_faces(), v < num_vertices().
 
-  std::array<VertexId, 3> face(FaceId f) const noexcept { return {point_[3 * f], point_[3 * f + 1], point_[3 * f + 2]}; }
-  FaceId parent(FaceId f) const noexcept { return parent_[f]; }  ///< kInvalid for a base face
-  /// children[i] of the paper, i in {0, 1}; kInvalid when absent.
-  FaceId child(FaceId f, int i) const noexcept { return children_[2 * f + static_cast<Index>(i)]; }
-  bool is_current(FaceId f) const noexcept { return children_[2 * f] == kInvalid; }
+  /// Origin vertex of h (the paper's Hedge::point). Unchecked: h < num_half_edges().
+  VertexId point(HalfEdgeId h) const noexcept {
+    VARMESH_ASSERT(h < point_.size());
+    return point_[h];
+  }
+  /// End vertex of h. Unchecked: h < num_half_edges().
+  VertexId target(HalfEdgeId h) const noexcept {
+    VARMESH_ASSERT(h < point_.size());
+    return point_[next(h)];
+  }
+  /// The opposite half-edge (see invariants 4 and 5); kInvalid on the border. Unchecked: h < num_half_edges().
+  HalfEdgeId mate(HalfEdgeId h) const noexcept {
+    VARMESH_ASSERT(h < mate_.size());
+    return mate_[h];
+  }
+
+  /// Corners of face f. Unchecked: f < num_faces().
+  std::array<VertexId, 3> face(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < parent_.size());
+    return {point_[3 * f], point_[3 * f + 1], point_[3 * f + 2]};
+  }
+  /// kInvalid for a base face. Unchecked: f < num_faces().
+  FaceId parent(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < parent_.size());
+    return parent_[f];
+  }
+  /// children[i] of the paper, i in {0, 1}; kInvalid when absent. Unchecked: f < num_faces(), i in {0, 1}.
+  FaceId child(FaceId f, int i) const noexcept {
+    VARMESH_ASSERT(f < parent_.size() && (i == 0 || i == 1));
+    return children_[2 * f + static_cast<Index>(i)];
+  }
+  /// Unchecked: f < num_faces().
+  bool is_current(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < parent_.size());
+    return children_[2 * f] == kInvalid;
+  }
   /// split_edge(f) := f.edge[0].
   static constexpr HalfEdgeId split_edge(FaceId f) noexcept { return 3 * f; }
-  const glm::vec3& position(VertexId v) const noexcept { return positions_[v]; }
+  /// Unchecked: v < num_vertices().
+  const glm::vec3& position(VertexId v) const noexcept {
+    VARMESH_ASSERT(v < positions_.size());
+    return positions_[v];
+  }
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
-  /// Error of the modification that removes f (0 while f is current).
-  float error(FaceId f) const noexcept { return error_[f]; }
+  /// Error of the modification that removes f (0 while f is current). Unchecked: f < num_faces().
+  float error(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < error_.size());
+    return error_[f];
+  }
 
   /// True when e is edge[0] of a removed face, i.e. names a modification. O(1).
   bool is_modification(HalfEdgeId e) const noexcept { return e < point_.size() && e % 3 == 0 && !is_current(fbase(e)); }
@@ -126,11 +161,11 @@ class FourKMesh {
   /// swap face; children[0] is meant). Precondition as pre_image. O(1).
   FourKFaceSet image(HalfEdgeId e) const;
   /// successor_f(f) = split_edge(f): the modification that removes f, or kInvalid when f is current
-  /// (it belongs to the drain). O(1).
+  /// (it belongs to the drain). O(1). Unchecked: f < num_faces().
   HalfEdgeId successor(FaceId f) const noexcept { return is_current(f) ? kInvalid : split_edge(f); }
   /// predecessor_f(f) = split_edge(f.parent): the modification that created f, kInvalid for a base face
-  /// (created by the source). O(1).
-  HalfEdgeId predecessor(FaceId f) const noexcept { return parent_[f] == kInvalid ? kInvalid : split_edge(parent_[f]); }
+  /// (created by the source). O(1). Unchecked: f < num_faces().
+  HalfEdgeId predecessor(FaceId f) const noexcept { return parent(f) == kInvalid ? kInvalid : split_edge(parent_[f]); }
   /// modification_type(e): NodeKind::kSwap when e.fbase and e.mate.fbase both have no second child, else
   /// NodeKind::kSplit. Precondition as pre_image. O(1).
   NodeKind modification_type(HalfEdgeId e) const;

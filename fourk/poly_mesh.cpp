@@ -179,10 +179,29 @@ PolyMesh pair_triangles(const TriMesh& mesh, std::size_t* num_leftovers) {
 }
 
 TriMesh triangulate(const PolyMesh& mesh) {
+  if (mesh.face_offsets.empty() || mesh.face_offsets.front() != 0 || mesh.face_offsets.back() != mesh.corners.size())
+    throw InvalidInput("triangulate: face_offsets must start with 0 and end with the number of corners");
+  const std::size_t nv = mesh.positions.size();
+  std::size_t triangles = 0;
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    if (mesh.face_offsets[f + 1] < mesh.face_offsets[f] || mesh.face_offsets[f + 1] > mesh.corners.size())
+      throw InvalidInput("triangulate: face_offsets decrease or run past the corners at face " + std::to_string(f), f);
+    for (Index c : mesh.face(f))
+      if (c >= nv)
+        throw InvalidInput("triangulate: face " + std::to_string(f) + " uses vertex " + std::to_string(c) +
+                               " out of range (" + std::to_string(nv) + " vertices)",
+                           f);
+    triangles += mesh.face_size(f) >= 3 ? mesh.face_size(f) - 2 : 0;
+  }
   TriMesh out;
-  out.positions.reserve(mesh.positions.size());
-  for (const glm::dvec3& p : mesh.positions) out.positions.emplace_back(p);
-  out.indices.reserve(3 * (mesh.corners.size() - 2 * mesh.num_faces()));
+  out.positions.reserve(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const glm::vec3 p(mesh.positions[v]);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw InvalidInput("triangulate: vertex " + std::to_string(v) + " is not finite in float", v);
+    out.positions.push_back(p);
+  }
+  out.indices.reserve(3 * triangles);
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
     const auto fc = mesh.face(f);
     for (std::size_t i = 1; i + 1 < fc.size(); ++i) out.indices.insert(out.indices.end(), {fc[0], fc[i], fc[i + 1]});

@@ -16,6 +16,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "multitri/detail/assert.hpp"
 #include "multitri/tri_mesh.hpp"
 #include "multitri/types.hpp"
 
@@ -28,8 +29,13 @@ struct PolyMesh {
 
   std::size_t num_vertices() const noexcept { return positions.size(); }
   std::size_t num_faces() const noexcept { return face_offsets.empty() ? 0 : face_offsets.size() - 1; }
-  std::size_t face_size(std::size_t f) const noexcept { return face_offsets[f + 1] - face_offsets[f]; }
+  /// Corners of face f. Unchecked: f < num_faces() (and well-formed offsets, which validate() checks).
+  std::size_t face_size(std::size_t f) const noexcept {
+    VARMESH_ASSERT(f + 1 < face_offsets.size());
+    return face_offsets[f + 1] - face_offsets[f];
+  }
   std::span<const Index> face(std::size_t f) const noexcept {
+    VARMESH_ASSERT(f + 1 < face_offsets.size());
     return {corners.data() + face_offsets[f], face_size(f)};
   }
   /// Appends a face; no check (validate() checks).
@@ -61,7 +67,10 @@ PolyMesh pair_triangles(const TriMesh& mesh, std::size_t* num_leftovers = nullpt
 PolyMesh poly_from_triangles(const TriMesh& mesh);
 
 /// Triangulation: a quad (c0..c3) becomes (c0, c1, c2), (c0, c2, c3) (its 4-8 diagonal); any other
-/// polygon becomes a fan from corner 0. Positions converted to float.
+/// polygon becomes a fan from corner 0 (a face of fewer than 3 corners gives none). Positions converted to
+/// float. The result passes TriMesh::validate(): throws InvalidInput naming the face or vertex for
+/// malformed face_offsets, a corner out of range, or a position that is not finite once in float
+/// (manifoldness is not required; PolyMesh::validate() checks it). O(corners).
 TriMesh triangulate(const PolyMesh& mesh);
 
 /// Generators for tests and demos. A cube of 6 quads (side 2, centred at the origin), and a torus of

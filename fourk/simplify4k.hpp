@@ -134,6 +134,8 @@ Simplify4kResult simplify4k(const TriMesh& mesh, const Simplify4kOptions& option
 /// above `level` are applied. The front refers to result.mt, which must outlive it and stay in place.
 /// Throws InvalidInput when level >= result.num_levels(). O(MT size).
 MtFront simplify4k_level_front(const Simplify4kResult& result, std::size_t level);
+/// The front would refer to the temporary's Mt: refused at compile time.
+MtFront simplify4k_level_front(const Simplify4kResult&& result, std::size_t level) = delete;
 
 /// The mesh of `level` (see simplify4k_level_front) with compact vertex numbering, faces in no particular
 /// order and corners as in the input's orientation; `vertex_ids` (optional) receives the input vertex of

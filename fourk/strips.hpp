@@ -62,6 +62,7 @@
 #include <string>
 #include <vector>
 
+#include "multitri/detail/assert.hpp"
 #include "multitri/mt.hpp"
 #include "multitri/mt_front.hpp"
 #include "multitri/types.hpp"
@@ -104,18 +105,34 @@ class StripPlan {
   /// 2-opt passes), plus O(k! k) per slot of k <= 6 image faces of a generic node. Memory kept: 16 bytes
   /// per Mt face. Throws InvalidInput when a face is reached from no base face (an Mt that fails validate()).
   explicit StripPlan(const Mt& mt, const StripPlanOptions& options = {});
+  /// A plan keeps a reference to its Mt: a temporary Mt would leave it dangling.
+  explicit StripPlan(const Mt&& mt, const StripPlanOptions& options = {}) = delete;
 
   const Mt& mt() const noexcept { return *mt_; }
-  /// Rank of face f in the hierarchical order (the preorder of the strip-children forest).
-  Index key(FaceId f) const noexcept { return key_[f]; }
-  /// Inverse of key().
-  FaceId face_at(Index key) const noexcept { return face_at_[key]; }
+  /// Rank of face f in the hierarchical order (the preorder of the strip-children forest). Unchecked:
+  /// f < num_faces(), as std::vector::operator[].
+  Index key(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < key_.size());
+    return key_[f];
+  }
+  /// Inverse of key(). Unchecked: key < num_faces().
+  FaceId face_at(Index key) const noexcept {
+    VARMESH_ASSERT(key < face_at_.size());
+    return face_at_[key];
+  }
   std::size_t num_faces() const noexcept { return key_.size(); }
   /// The base strip (the source's image in strip order; the runs are the base front's runs).
   std::span<const FaceId> base_order() const noexcept { return base_order_; }
   /// Orientation of face f: the corner where the path enters it and the corner where it leaves.
-  VertexId entry(FaceId f) const noexcept { return entry_[f]; }
-  VertexId exit(FaceId f) const noexcept { return exit_[f]; }
+  /// Unchecked: f < num_faces().
+  VertexId entry(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < entry_.size());
+    return entry_[f];
+  }
+  VertexId exit(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < exit_.size());
+    return exit_[f];
+  }
   const StripPlanStats& stats() const noexcept { return stats_; }
   std::size_t memory_bytes() const noexcept;
 
@@ -161,6 +178,8 @@ class StripFront {
  public:
   /// The base front and the base strip.
   explicit StripFront(const StripPlan& plan);
+  /// A front keeps a reference to its plan: a temporary StripPlan would leave it dangling.
+  explicit StripFront(const StripPlan&& plan) = delete;
 
   const StripPlan& plan() const noexcept { return *plan_; }
   const Mt& mt() const noexcept { return plan_->mt(); }

@@ -19,6 +19,7 @@
 
 #include "multitri/errors.hpp"
 #include "multitri/mt_front.hpp"
+#include "multitri/shapes.hpp"
 
 namespace varmesh {
 namespace {
@@ -449,6 +450,20 @@ TEST(FourKMesh, BorderAndInteriorOperationsOnAnOpenMesh) {
   front.validate();
   EXPECT_EQ(front.num_faces(), fine.num_faces());
 }
+
+#if defined(VARMESH_ENABLE_ASSERTS) || !defined(NDEBUG)
+// The unchecked accessors check their documented preconditions in debug and sanitizer builds.
+TEST(FourKMeshDeathTest, UncheckedAccessorsAssert) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const FourKMesh k(make_icosphere(0));
+  const Index far = 1u << 30;
+  EXPECT_DEATH(k.point(far), "precondition");
+  EXPECT_DEATH(k.mate(far), "precondition");
+  EXPECT_DEATH(k.face(far), "precondition");
+  EXPECT_DEATH(k.is_current(far), "precondition");
+  EXPECT_DEATH(k.position(far), "precondition");
+}
+#endif
 
 }  // namespace
 }  // namespace varmesh

@@ -17,6 +17,7 @@
 #include <set>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -715,6 +716,14 @@ TEST(Simplify4k, CowFigure21SharedData) {
   check_queries(in, r, true, 3, 10, 0);
   check_level_bounds(in, r, 3, 17);
 }
+
+// The level front refers to result.mt: a temporary result is refused at compile time.
+template <class R>
+concept LevelFrontAccepts = requires(R&& r) { simplify4k_level_front(std::forward<R>(r), std::size_t{0}); };
+static_assert(LevelFrontAccepts<const Simplify4kResult&>);
+static_assert(LevelFrontAccepts<Simplify4kResult&>);
+static_assert(!LevelFrontAccepts<Simplify4kResult>);
+static_assert(!LevelFrontAccepts<const Simplify4kResult>);
 
 }  // namespace
 }  // namespace varmesh

@@ -12,6 +12,8 @@
 #include <map>
 #include <random>
 #include <set>
+#include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -749,6 +751,35 @@ TEST(StripBadInput, TypedErrors) {
   EXPECT_THROW(encode_strip(mt, StripRuns{{}}), InvalidInput);
   EXPECT_TRUE(decode_strip(std::vector<Index>{}).empty());
   EXPECT_TRUE(decode_strip(std::vector<Index>{kStripRestart, 1, 2, kStripRestart}).empty());
+}
+
+// A plan refers to its Mt and a front to its plan: temporaries are refused at compile time.
+static_assert(!std::is_constructible_v<StripPlan, Mt>);
+static_assert(!std::is_constructible_v<StripPlan, Mt, const StripPlanOptions&>);
+static_assert(std::is_constructible_v<StripPlan, const Mt&>);
+static_assert(!std::is_constructible_v<StripFront, StripPlan>);
+static_assert(std::is_constructible_v<StripFront, const StripPlan&>);
+
+// A criterion or a sink that throws interrupts the query between moves: the strip stays that of the front.
+TEST(StripBadInput, ThrowingCriterionOrSinkLeavesAValidStrip) {
+  const Mt mt = height_mt(square(), 9);
+  const StripPlan plan(mt);
+  StripFront sf(plan);
+  int calls = 0;
+  Query q;
+  q.criterion = Criterion::custom([&calls](const ElementBound& b) {
+    if (++calls == 40) throw std::runtime_error("criterion failed");
+    return b.error <= 0.01f;
+  });
+  EXPECT_THROW(extract(sf, q), std::runtime_error);
+  expect_valid(sf);
+  NodeId deep = 0;
+  for (NodeId n = 1; n < mt.num_nodes(); ++n)
+    if (!sf.front().is_applied(n) && !sf.front().can_apply(n)) deep = n;
+  ASSERT_NE(deep, 0u);
+  EXPECT_THROW(sf.refine(deep, [](NodeId) { throw std::runtime_error("sink"); }), std::runtime_error);
+  expect_valid(sf);
+  EXPECT_EQ(hierarchical_strip(plan, sf.front().faces()), sf.runs());
 }
 
 }  // namespace
