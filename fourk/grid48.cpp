@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <unordered_map>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -32,6 +36,9 @@ struct PlaneXY {
   }
 };
 
+// Largest tile (cells per side): the automatic choice and Grid48Options::tile_size stay within it.
+constexpr std::size_t kMaxTileSize = std::size_t(1) << 15;
+
 float round_up(double v) {
   float f = static_cast<float>(v);
   if (static_cast<double>(f) < v) f = std::nextafter(f, 3.0e38f);
@@ -56,23 +63,33 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
   std::size_t s = 1;
   if (options.tile_size != 0) {
     s = options.tile_size;
-    if ((s & (s - 1)) != 0 || s < 2) throw InvalidInput("Grid48: tile_size must be a power of two >= 2");
+    if ((s & (s - 1)) != 0 || s < 2 || s > kMaxTileSize)
+      throw InvalidInput("Grid48: tile_size " + std::to_string(s) + " is not a power of two in [2, 2^15]");
   } else {
     // The largest tile whose padding stays within max_padding (at least 2 cells).
     const double area = double(cw) * double(ch);
     s = 2;
-    for (std::size_t t = 4; t <= (std::size_t(1) << 15) && t / 2 < std::max(cw, ch); t *= 2) {
+    for (std::size_t t = 4; t <= kMaxTileSize && t / 2 < std::max(cw, ch); t *= 2) {
       const auto [tx, ty] = padded(t);
       if (double(tx * t) * double(ty * t) <= options.max_padding * area) s = t;
     }
   }
   tile_ = s;
-  log2_tile_ = grid48_detail::ctz(s);
+  log2_tile_ = detail::grid48_ctz(s);
   std::tie(tx_, ty_) = padded(s);
   lw_ = tx_ * s + 1;
   lh_ = ty_ * s + 1;
-  row_of_ = FastDivider(static_cast<std::uint32_t>(lw_));
   if (double(lw_) * double(lh_) > double(1u << 30)) throw InvalidInput("Grid48: grid too large (more than 2^30 lattice points)");
+  // Lattice coordinates are column * spacing_x and row * spacing_y in float, padding included.
+  auto check_extent = [](const char* name, float spacing, std::size_t steps) {
+    if (double(steps) * double(spacing) <= double(std::numeric_limits<float>::max())) return;
+    char text[160];
+    std::snprintf(text, sizeof text, "Grid48: %s %g times %zu lattice steps overflows float", name, double(spacing), steps);
+    throw InvalidInput(text);
+  };
+  check_extent("spacing_x", sx_, lw_ - 1);
+  check_extent("spacing_y", sy_, lh_ - 1);
+  row_of_ = detail::FastDivider(static_cast<std::uint32_t>(lw_));
   // Heights straight into the records (padding repeats the last row and column); errors come later.
   records_.resize(lw_ * lh_);
   for (std::size_t y = 0; y < lh_; ++y) {
@@ -93,6 +110,32 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
     compute_bounds_fast(options.exact_errors);
   }
   build_histogram();
+}
+
+Grid48::Grid48(Grid48&& other) noexcept { *this = std::move(other); }
+
+Grid48& Grid48::operator=(Grid48&& other) noexcept {
+  if (this == &other) return *this;
+  // Every member is taken and reset to its initial value, so `other` is an empty hierarchy.
+  width_ = std::exchange(other.width_, 0);
+  height_ = std::exchange(other.height_, 0);
+  lw_ = std::exchange(other.lw_, 0);
+  lh_ = std::exchange(other.lh_, 0);
+  tile_ = std::exchange(other.tile_, 1);
+  tx_ = std::exchange(other.tx_, 0);
+  ty_ = std::exchange(other.ty_, 0);
+  log2_tile_ = std::exchange(other.log2_tile_, 0);
+  sx_ = std::exchange(other.sx_, 1.0f);
+  sy_ = std::exchange(other.sy_, 1.0f);
+  row_of_ = std::exchange(other.row_of_, detail::FastDivider{});
+  z_ = std::exchange(other.z_, {});
+  error_ = std::exchange(other.error_, {});
+  records_ = std::exchange(other.records_, {});
+  radius_ = std::exchange(other.radius_, {});
+  hist_key0_ = std::exchange(other.hist_key0_, 0);
+  refined_above_ = std::exchange(other.refined_above_, {});
+  faces_above_ = std::exchange(other.faces_above_, {});
+  return *this;
 }
 
 namespace {
@@ -268,7 +311,7 @@ void Grid48::compute_bounds_fast(bool exact) {
   };
   // Any diamond, near the padding or not.
   auto visit = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t d, bool square) {
-    const int ld = grid48_detail::ctz(static_cast<std::size_t>(d));
+    const int ld = detail::grid48_ctz(static_cast<std::size_t>(d));
     const std::size_t p = static_cast<std::size_t>(y * w + x);
     const Corners cn = diamond_corners(x, y, d, ld, square);
     const std::ptrdiff_t bx = cn.bx, by = cn.by, cx = cn.cx, cy = cn.cy;
@@ -439,7 +482,7 @@ void Grid48::compute_bounds_fast(bool exact) {
   });
 }
 
-std::size_t Grid48::num_nodes() const noexcept { return lw_ * lh_ - (tx_ + 1) * (ty_ + 1); }
+std::size_t Grid48::num_nodes() const noexcept { return lw_ * lh_ == 0 ? 0 : lw_ * lh_ - (tx_ + 1) * (ty_ + 1); }
 
 std::size_t Grid48::memory_bytes() const noexcept {
   return records_.size() * sizeof(PointRecord) + radius_.size() * sizeof(float) +
@@ -494,7 +537,7 @@ double Grid48::scan_own_error(std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t
     // Diagonal from (cx, cy) to the opposite corner (ox, oy) (the hypotenuse of diamond_corners); the
     // off-diagonal corners are the apexes of the two halves, one on the left column (x - d), one on the
     // right (x + d).
-    const Corners cn = diamond_corners(x, y, d, grid48_detail::ctz(static_cast<std::size_t>(d)), true);
+    const Corners cn = diamond_corners(x, y, d, detail::grid48_ctz(static_cast<std::size_t>(d)), true);
     const std::ptrdiff_t cx = cn.bx, cy = cn.by, ox = cn.cx, oy = cn.cy;
     // Off corners: (ox, cy) and (cx, oy).
     const bool first_left = ox == x - d;
@@ -512,7 +555,7 @@ double Grid48::scan_own_error(std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t
       if (split <= last_x) e = std::max(e, span_error(row, split, xr, right.base + right.gy * double(yy), right.gx));
     }
   } else {
-    const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+    const int lx = detail::grid48_ctz(static_cast<std::size_t>(x)), ly = detail::grid48_ctz(static_cast<std::size_t>(y));
     const bool horizontal = lx < ly;  // split edge along x, apexes below and above
     // Triangle apexes: (below|left) and (above|right); missing outside the lattice.
     const std::ptrdiff_t ax0 = horizontal ? x : x - d, ay0 = horizontal ? y - d : y;
@@ -717,6 +760,17 @@ Mt Grid48::to_mt() const {
 }
 
 double Grid48::max_vertical_error(const TriMesh& mesh) const {
+  if (mesh.indices.size() % 3 != 0) throw InvalidInput("Grid48::max_vertical_error: index count is not a multiple of 3");
+  for (std::size_t i = 0; i < mesh.indices.size(); ++i)
+    if (mesh.indices[i] >= mesh.positions.size())
+      throw InvalidInput("Grid48::max_vertical_error: face " + std::to_string(i / 3) + " refers to vertex " +
+                             std::to_string(mesh.indices[i]) + " of " + std::to_string(mesh.positions.size()),
+                         i / 3);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const glm::vec3& p = mesh.positions[v];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw InvalidInput("Grid48::max_vertical_error: vertex " + std::to_string(v) + " has a non-finite position", v);
+  }
   std::vector<std::uint8_t> covered(width_ * height_, 0);
   double worst = 0.0;
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
@@ -867,7 +921,10 @@ class GridClipper {
 
 }  // namespace
 
-Grid48Front::Grid48Front(const Grid48& grid) : grid_(&grid) { reset(); }
+Grid48Front::Grid48Front(const Grid48& grid) : grid_(&grid) {
+  if (grid.num_points() == 0) throw InvalidInput("Grid48Front: the grid is empty (a moved-from Grid48)");
+  reset();
+}
 
 template <class Wants>
 void Grid48Front::descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
@@ -893,6 +950,19 @@ void Grid48Front::clear_refined() {
   }
   num_touched_ = 0;
   touched_valid_ = false;
+}
+
+void Grid48Front::restore_base() noexcept {
+  std::fill(refined_.begin(), refined_.end(), std::uint8_t{0});
+  std::fill(slot_.begin(), slot_.end(), kInvalid);
+  exposed_.clear();
+  maximal_.clear();
+  num_touched_ = 0;
+  touched_valid_ = true;
+  num_refined_ = 0;
+  num_faces_ = 2 * grid_->tiles_x() * grid_->tiles_y();
+  sets_valid_ = false;
+  view_valid_ = false;
 }
 
 // The object-error query over the whole grid. Node errors are saturated (a diamond's error is at least
@@ -1102,15 +1172,31 @@ TriMesh Grid48Front::extract_mesh(const Query& q, std::vector<Index>* lattice_id
   clear_refined();
   TriMesh out;
   std::vector<Index> ids;
-  if (grid_->needs_clip())
-    descend_object<true, true>(q.criterion.threshold(), &out, &ids);
-  else
-    descend_object<false, true>(q.criterion.threshold(), &out, &ids);
+  try {
+    if (grid_->needs_clip())
+      descend_object<true, true>(q.criterion.threshold(), &out, &ids);
+    else
+      descend_object<false, true>(q.criterion.threshold(), &out, &ids);
+  } catch (...) {
+    restore_base();  // the descent had rewritten the front in place (only memory can run out here)
+    throw;
+  }
   if (lattice_ids) *lattice_ids = std::move(ids);
   return out;
 }
 
 QueryStats Grid48Front::extract_fast(const Query& q) {
+  // The descent marks diamonds in place (1 wanted, 2 evaluated and not), calling the criterion as it
+  // goes: if that throws, the marks and counters describe no front, so the front goes back to the base.
+  try {
+    return extract_fast_unguarded(q);
+  } catch (...) {
+    restore_base();
+    throw;
+  }
+}
+
+QueryStats Grid48Front::extract_fast_unguarded(const Query& q) {
   if (q.triangle_budget != 0 || q.time_budget_ms > 0.0) return extract(*this, q);
   clear_refined();
   if (q.criterion.kind() == Criterion::Kind::kObjectError && q.focus.everywhere())
@@ -1154,7 +1240,15 @@ QueryStats Grid48Front::extract_fast(const Query& q) {
   return stats;
 }
 
+void ViewQuery::validate() const {
+  camera.validate();
+  if (!(pixels > 0.0f)) throw InvalidInput("ViewQuery: pixels must be > 0 (got " + std::to_string(pixels) + ")");
+  if (!(viewport_height > 0.0f))
+    throw InvalidInput("ViewQuery: viewport_height must be > 0 (got " + std::to_string(viewport_height) + ")");
+}
+
 Query ViewQuery::to_query() const {
+  validate();
   Query q;
   std::vector<Criterion> parts{Criterion::outside_frustum(camera.frustum()),
                                Criterion::screen_error(camera, viewport_height, pixels)};
@@ -1194,7 +1288,7 @@ struct Grid48Front::ViewContext {
   float moved_up = 0.0f, turned_up = 0.0f;      // accumulated motion now, rounded up
   float moved_down = 0.0f, turned_down = 0.0f;  // and down
   // Lattice point -> centre x, y.
-  FastDivider row_of;
+  detail::FastDivider row_of;
   std::uint32_t lw = 1;
   float sx = 1.0f, sy = 1.0f;
 
@@ -1355,6 +1449,7 @@ void Grid48Front::prefetch_coarsen(Index p) const {
 }
 
 QueryStats Grid48Front::update_view(const ViewQuery& v) {
+  v.validate();
   const ViewQuery& o = last_view_;
   const bool same_params = view_valid_ && o.viewport_height == v.viewport_height && o.pixels == v.pixels &&
                            o.object_error == v.object_error && o.camera.fov_y_deg == v.camera.fov_y_deg &&
@@ -1398,7 +1493,7 @@ QueryStats Grid48Front::update_view(const ViewQuery& v) {
   cx.turned_up = float_up(turned_);
   cx.moved_down = float_down(moved_);
   cx.turned_down = float_down(turned_);
-  cx.row_of = FastDivider(static_cast<std::uint32_t>(grid_->lattice_width()));
+  cx.row_of = detail::FastDivider(static_cast<std::uint32_t>(grid_->lattice_width()));
   cx.lw = static_cast<std::uint32_t>(grid_->lattice_width());
   cx.sx = grid_->spacing_x();
   cx.sy = grid_->spacing_y();
@@ -1477,13 +1572,13 @@ void Grid48Front::reset() {
   sets_valid_ = true;
 }
 
-void Grid48Front::set_add(BoundarySet& s, const Entry& e, Expiry x) const {
+void Grid48Front::set_add(BoundarySet& s, const Entry& e, Expiry x) {
   slot_[e.point] = static_cast<Index>(s.entry.size());
   s.entry.push_back(e);
   s.expiry.push_back(x);
 }
 
-void Grid48Front::set_remove(BoundarySet& s, Index p) const {
+void Grid48Front::set_remove(BoundarySet& s, Index p) {
   const Index i = slot_[p];
   const Index last = static_cast<Index>(s.entry.size() - 1);
   if (i != last) {
@@ -1496,23 +1591,19 @@ void Grid48Front::set_remove(BoundarySet& s, Index p) const {
   slot_[p] = kInvalid;
 }
 
-void Grid48Front::rebuild_sets() const {
-  const Grid48& g = *grid_;
+void Grid48Front::rebuild_sets() {
+  // The stale sets still match slot_ (nothing but extract_fast changed refined_ since they were valid):
+  // small ones are cleared entry by entry, large ones by a fill of the whole lattice (sequential).
+  if ((exposed_.size() + maximal_.size()) >= slot_.size() / 8) {
+    std::fill(slot_.begin(), slot_.end(), kInvalid);
+  } else {
+    for (const Entry& e : exposed_.entry) slot_[e.point] = kInvalid;
+    for (const Entry& e : maximal_.entry) slot_[e.point] = kInvalid;
+  }
   exposed_.clear();
   maximal_.clear();
-  slot_.assign(g.num_points(), kInvalid);
-  for (Index p = 0; p < g.num_points(); ++p) {
-    if (!g.is_node(p)) continue;
-    if (refined_[p]) {
-      bool leaf = true;
-      g.for_each_child(p, [&](Index c) { leaf = leaf && !refined_[c]; });
-      if (leaf) set_add(maximal_, entry_of(p), {});
-    } else {
-      bool exposed = g.level(p) == 0;
-      g.for_each_parent(p, [&](Index q) { exposed = exposed || refined_[q]; });
-      if (exposed) set_add(exposed_, entry_of(p), {});
-    }
-  }
+  for_each_boundary([&](Index p) { set_add(exposed_, entry_of(p), {}); },
+                    [&](Index p) { set_add(maximal_, entry_of(p), {}); });
   sets_valid_ = true;
 }
 
@@ -1618,11 +1709,29 @@ void Grid48Front::validate() const {
 
 
 TriMesh Grid48Front::to_mesh(std::vector<Index>* lattice_ids) const {
+  const std::size_t n = grid_->num_points();
+  // Borrow the front's map (all kInvalid while not borrowed); a concurrent call fills its own.
+  if (vertex_map_.busy.exchange(true, std::memory_order_acquire)) {
+    std::vector<Index> own(n, kInvalid);
+    return to_mesh_with(own.data(), lattice_ids);
+  }
+  std::vector<Index>& remap = vertex_map_.map;
+  try {
+    if (remap.size() != n) remap.assign(n, kInvalid);
+    TriMesh out = to_mesh_with(remap.data(), lattice_ids);
+    vertex_map_.busy.store(false, std::memory_order_release);
+    return out;
+  } catch (...) {
+    std::fill(remap.begin(), remap.end(), kInvalid);  // entries the interrupted call had set
+    vertex_map_.busy.store(false, std::memory_order_release);
+    throw;
+  }
+}
+
+TriMesh Grid48Front::to_mesh_with(Index* remap, std::vector<Index>* lattice_ids) const {
   TriMesh out;
   const Grid48& g = *grid_;
   const std::size_t lw = g.lattice_width();
-  std::vector<Index>& remap = vertex_of_point_;
-  if (remap.size() != g.num_points()) remap.assign(g.num_points(), kInvalid);
   std::vector<Index> ids;
   ids.reserve(num_faces_ / 2 + 16);
   out.positions.reserve(num_faces_ / 2 + 16);

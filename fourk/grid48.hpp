@@ -24,6 +24,8 @@
 /// bounds the output size of an object-error extraction. A front adds up to 17 bytes per lattice point
 /// (refined flags, one slot shared by its two boundary sets, the touched list, the vertex maps of to_mesh
 /// and extract_mesh, each allocated on first use) plus its boundary sets (24 bytes per boundary diamond).
+#include <atomic>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -33,6 +35,7 @@
 
 #include "multitri/bounds.hpp"
 #include "multitri/camera.hpp"
+#include "multitri/detail/assert.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/huge_pages.hpp"
 #include "multitri/query.hpp"
@@ -42,8 +45,10 @@
 
 namespace varmesh {
 
-/// Exact division of 31-bit numerators by a fixed divisor with one multiply and one shift
-/// (Granlund and Montgomery 1994, round-up variant): lattice index -> row without a hardware divide.
+namespace detail {
+
+/// Exact division of 31-bit numerators by a fixed divisor d (1 <= d <= 2^31) with one multiply and one
+/// shift (Granlund and Montgomery 1994, round-up variant): lattice index -> row without a hardware divide.
 struct FastDivider {
   std::uint64_t magic = 1ull << 32;
   int shift = 32;
@@ -57,11 +62,17 @@ struct FastDivider {
   std::uint32_t div(std::uint32_t n) const noexcept { return static_cast<std::uint32_t>((n * magic) >> shift); }
 };
 
+/// Trailing zero bits of a lattice coordinate; 62 for 0 (so that 1 << result stays defined).
+inline int grid48_ctz(std::uint64_t v) noexcept { return v == 0 ? 62 : std::countr_zero(v); }
+
+}  // namespace detail
+
 struct Grid48Options {
   /// Largest acceptable padded-area ratio when choosing the tile size (>= 1). Larger tiles give a
   /// coarser base mesh but more padding.
   double max_padding = 1.15;
-  /// Force a tile size (power of two cells, 0 = automatic).
+  /// Force a tile size: a power of two from 2 to 2^15 cells, 0 = automatic (which also stays within that
+  /// range). The lattice must still hold at most 2^30 points, so 2^14 is the largest size that builds.
   std::size_t tile_size = 0;
   /// Node errors. true (default): the exact largest vertical distance between each diamond's triangles
   /// and the samples they cover (saturated: at least the children's), by scanning the samples at every
@@ -74,11 +85,25 @@ struct Grid48Options {
   bool reference_scan = false;
 };
 
+/// Point ids: every lattice point p < num_points() has an id (row-major, p = y * lattice_width() + x).
+/// The nodes (diamonds) are the points that are not tile corners (is_node()). Accessors taking an id are
+/// unchecked, as std::vector::operator[] (VARMESH_ASSERT in debug and sanitizer builds): those reading
+/// per-point data need p < num_points(); the hierarchy relations (level, parents, children, family,
+/// num_triangles) are meaningful only for nodes and need p < num_points() and is_node(p).
 class Grid48 {
  public:
-  /// Builds the hierarchy. Throws InvalidInput for grids smaller than 2 x 2, larger than 2^30 lattice
-  /// points, or with non-finite samples (naming the sample). O(samples * levels) for the exact errors.
+  /// Builds the hierarchy. Throws InvalidInput (naming the option or the sample) for grids smaller than
+  /// 2 x 2, larger than 2^30 lattice points, with non-finite samples, with a tile_size that is not a power
+  /// of two in [2, 2^15] or a max_padding below 1, or with a spacing so large that a lattice point's x or
+  /// y coordinate (column * spacing_x, row * spacing_y) overflows float. O(samples * levels) for the
+  /// exact errors.
   explicit Grid48(const HeightField& field, const Grid48Options& options = {});
+  Grid48(const Grid48&) = default;
+  Grid48& operator=(const Grid48&) = default;
+  /// A move leaves `other` an empty hierarchy: num_points() == 0, no nodes; a Grid48Front refuses it.
+  /// Fronts built on `other` are not moved with it (they keep referring to the emptied object).
+  Grid48(Grid48&& other) noexcept;
+  Grid48& operator=(Grid48&& other) noexcept;
 
   std::size_t grid_width() const noexcept { return width_; }
   std::size_t grid_height() const noexcept { return height_; }
@@ -92,23 +117,41 @@ class Grid48 {
   /// Number of lattice points (node ids range over them; tile corners are not nodes).
   std::size_t num_points() const noexcept { return lw_ * lh_; }
   std::size_t num_nodes() const noexcept;
+  /// Whether lattice point p is a node (not a tile corner). Unchecked: p < num_points().
   bool is_node(Index p) const noexcept;
   /// Number of levels of the hierarchy (depth of the DAG below the source).
   int num_levels() const noexcept { return 2 * log2_tile_; }
-  /// Level of a node: 0 for tile centres, increasing by one per binary subdivision step.
+  /// Level of node p: 0 for tile centres, increasing by one per binary subdivision step, up to
+  /// num_levels() - 1. Unchecked: p < num_points() and is_node(p) (a tile corner has no level).
   int level(Index p) const noexcept;
 
-  /// Column and row of lattice point p.
+  /// Column and row of lattice point p. Unchecked: p < num_points().
   std::uint32_t px(Index p) const noexcept { return p - py(p) * static_cast<std::uint32_t>(lw_); }
   std::uint32_t py(Index p) const noexcept { return row_of_.div(p); }
+  /// World position, height, node error and bounding-sphere radius of lattice point p (error and radius
+  /// are 0 for tile corners). Unchecked: p < num_points(), as std::vector::operator[].
   glm::vec3 position(Index p) const noexcept {
+    VARMESH_ASSERT(p < num_points());
     const std::uint32_t y = py(p), x = p - y * static_cast<std::uint32_t>(lw_);
     return {static_cast<float>(x) * sx_, static_cast<float>(y) * sy_, records_[p].z};
   }
-  float height_at(Index p) const noexcept { return records_[p].z; }
-  float error(Index p) const noexcept { return records_[p].error; }
-  float radius(Index p) const noexcept { return radius_[p]; }
-  ElementBound bound(Index p) const noexcept { return {position(p), radius_[p], records_[p].error, {}}; }
+  float height_at(Index p) const noexcept {
+    VARMESH_ASSERT(p < num_points());
+    return records_[p].z;
+  }
+  float error(Index p) const noexcept {
+    VARMESH_ASSERT(p < num_points());
+    return records_[p].error;
+  }
+  float radius(Index p) const noexcept {
+    VARMESH_ASSERT(p < num_points());
+    return radius_[p];
+  }
+  /// The bound of node p as the query criteria read it. Unchecked: p < num_points().
+  ElementBound bound(Index p) const noexcept {
+    VARMESH_ASSERT(p < num_points());
+    return {position(p), radius_[p], records_[p].error, {}};
+  }
 
   /// Upper bounds on the number of diamonds refined and of faces (unclipped) of an object-error extraction
   /// at `threshold` (the diamonds with error > threshold), from a histogram of the errors at 1/32-octave
@@ -117,11 +160,12 @@ class Grid48 {
   std::size_t max_faces_above(float threshold) const noexcept;
 
   /// Calls fn(parent) for the one or two parents of node p (none for tile centres, whose parent is the
-  /// source).
+  /// source). Unchecked: p < num_points() and is_node(p).
   template <class Fn> void for_each_parent(Index p, Fn&& fn) const;
-  /// Calls fn(child) for the two or four children of node p (none at the finest level).
+  /// Calls fn(child) for the two or four children of node p (none at the finest level). Unchecked:
+  /// p < num_points() and is_node(p) (a tile corner has no children; the call would list garbage ids).
   template <class Fn> void for_each_child(Index p, Fn&& fn) const;
-  /// Faces node p removes: 2, or 1 on the lattice border.
+  /// Faces node p removes: 2, or 1 on the lattice border. Unchecked: p < num_points() and is_node(p).
   int num_triangles(Index p) const noexcept;
 
   /// The parents and children of node p (those of for_each_parent and for_each_child), computed together,
@@ -133,8 +177,10 @@ class Grid48 {
     Index co_parent[4];
     int num_parents = 0, num_children = 0;
   };
+  /// Unchecked: p < num_points() and is_node(p).
   Family family(Index p) const noexcept;
-  /// Whether some child c of node p has refined[c] != 0.
+  /// Whether some child c of node p has refined[c] != 0 (refined: one byte per lattice point). Unchecked:
+  /// p < num_points() and is_node(p).
   bool has_refined_child(Index p, const std::uint8_t* refined) const noexcept;
 
   /// Bytes held by the hierarchy's arrays.
@@ -144,7 +190,9 @@ class Grid48 {
   Mt to_mt() const;
 
   /// Largest vertical distance between `mesh` (a mesh extracted from this hierarchy, in world coordinates,
-  /// covering the grid rectangle) and every grid sample, located by walking the mesh. For tests/benchmarks.
+  /// covering the grid rectangle) and every grid sample, located by walking the mesh; HUGE_VAL when some
+  /// sample lies under no triangle. Throws InvalidInput naming the face or vertex for an index count that
+  /// is not a multiple of 3, an index out of range or a non-finite position. For tests/benchmarks.
   double max_vertical_error(const TriMesh& mesh) const;
 
   // Internal layout helpers used by Grid48Front.
@@ -174,7 +222,7 @@ class Grid48 {
   std::size_t tile_ = 1, tx_ = 0, ty_ = 0;
   int log2_tile_ = 0;
   float sx_ = 1.0f, sy_ = 1.0f;
-  FastDivider row_of_;
+  detail::FastDivider row_of_;
   // Scratch of the reference scan (Grid48Options::reference_scan), released when the hierarchy is built:
   // heights as contiguous rows, errors. The other builds work in records_ directly.
   HugeVector<float> z_;      // lattice heights (padding repeats the border)
@@ -188,57 +236,100 @@ class Grid48 {
   std::vector<std::uint32_t> refined_above_, faces_above_;
 };
 
-/// The state of one extraction on a Grid48: which diamonds are split. Models RefinableFront (query.hpp).
 /// The usual view-dependent terrain query: refine inside the frustum until the projected error is at most
 /// `pixels` on a viewport `viewport_height` pixels high (and, if object_error >= 0, stop wherever the
-/// vertical error is at most object_error). to_query() gives the equivalent generic Query.
+/// vertical error is at most object_error; a negative or NaN object_error is unused). to_query() gives the
+/// equivalent generic Query.
 struct ViewQuery {
   Camera camera;
   float viewport_height = 1080.0f;
   float pixels = 1.0f;
   float object_error = -1.0f;
+  /// Throws InvalidInput when the camera is invalid (Camera::validate) or pixels or viewport_height is not
+  /// > 0 (NaN included): the checks of Criterion::screen_error. to_query() and
+  /// Grid48Front::update_view() call it.
+  void validate() const;
+  /// The equivalent Query. Throws as validate().
   Query to_query() const;
 };
 
+/// The state of one extraction on a Grid48: which diamonds are split. Models RefinableFront (query.hpp).
+///
+/// The front refers to its Grid48, which must outlive it and stay in place (it is not moved along with a
+/// moved Grid48). Copies are independent fronts on the same grid. A moved-from front may only be assigned
+/// to, reset() or destroyed.
+///
+/// Threads: the const members (to_mesh, the candidate listings, validate, ...) only read the front, or
+/// synchronise what they share (to_mesh's vertex map), so any number of threads may call them on one
+/// front at once, as long as no thread calls a non-const member at the same time.
+///
+/// Exceptions: a criterion (Criterion::custom) may throw. refine(), coarsen_one() and the generic
+/// extract()/update() (query.hpp) leave a valid front when it does (each move is complete before the
+/// next evaluation); extract_fast() and extract_mesh(), which rebuild the front in place, leave it at the
+/// base mesh (as after reset()). validate() holds in every case.
 class Grid48Front {
  public:
+  /// The base front (the two triangles of every tile). Throws InvalidInput when `grid` is empty (a
+  /// moved-from Grid48).
   explicit Grid48Front(const Grid48& grid);
+  /// A front keeps a reference to its grid: a temporary Grid48 would leave it dangling.
+  explicit Grid48Front(const Grid48&& grid) = delete;
 
   const Grid48& grid() const noexcept { return *grid_; }
   std::size_t num_faces() const noexcept { return num_faces_; }
   std::size_t num_refined() const noexcept { return num_refined_; }
 
   void reset();
-  bool is_refined(Index p) const noexcept { return refined_[p] != 0; }
+  /// Unchecked: p < grid().num_points(), as std::vector::operator[].
+  bool is_refined(Index p) const noexcept {
+    VARMESH_ASSERT(p < refined_.size());
+    return refined_[p] != 0;
+  }
+  /// Refined, and no child refined. Unchecked: p < grid().num_points().
   bool is_coarsenable(Index p) const noexcept;
   /// Throws InvalidInput naming `p` and `who` when p is not a diamond of the grid (out of range, or a tile
   /// corner: those are never refined). refine() and coarsen_one() check.
   void check_diamond(Index p, const char* who) const;
+  /// Unchecked: p < grid().num_points().
   ElementBound element_bound(Index p) const noexcept { return grid_->bound(p); }
+  /// Unchecked: p is a node (Grid48::level's precondition).
   std::uint64_t tie_key(Index p) const noexcept { return (std::uint64_t(grid_->level(p)) << 32) | p; }
+  /// Refines diamond p after its missing ancestors, calling sink(r) after each diamond r is refined (the
+  /// front is complete at that point, so a sink that throws leaves it valid). Throws as check_diamond.
   template <class Sink> void refine(Index p, Sink&& sink);
   void refine(Index p) { refine(p, [](Index) {}); }
+  /// Unrefines p. Throws InvalidInput naming p unless it is a diamond and is_coarsenable(p).
   void coarsen_one(Index p);
+  /// The exposed diamonds (unrefined, a tile centre or with a refined parent) and the maximal ones
+  /// (refined, no refined child), in no particular order. Read-only: after extract_fast(), which leaves the
+  /// boundary sets to be rebuilt by the next move, they are listed from the diamonds that extraction
+  /// evaluated (O(those)); otherwise from the sets (O(listed)).
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const;
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const;
+  /// Unchecked: p is a node (Grid48::for_each_child's precondition).
   template <class Fn> void for_each_child_candidate(Index p, Fn&& fn) const { grid_->for_each_child(p, fn); }
   template <class Fn> void for_each_parent_candidate(Index p, Fn&& fn) const { grid_->for_each_parent(p, fn); }
 
   /// The current mesh in world coordinates, clipped to the grid rectangle; vertices are shared, triangles
   /// counter-clockwise seen from +z. `lattice_ids` (optional) gets the lattice point of each vertex
-  /// (kInvalid for vertices created by clipping).
+  /// (kInvalid for vertices created by clipping). O(faces): the lattice point -> vertex map (4 bytes per
+  /// lattice point, kept by the front between calls) is borrowed for the call. Safe to call from several
+  /// threads at once: a call that finds the map borrowed by another allocates and fills its own
+  /// (O(lattice points) more); the results are the same.
   TriMesh to_mesh(std::vector<Index>* lattice_ids = nullptr) const;
 
   /// extract() for queries without budgets, by one recursive descent over the triangles (no candidate
   /// stack). For monotone criteria this is the least fixpoint extract() computes; if the descent finds a
   /// refined diamond whose parent is not refined (a non-monotone criterion), it falls back to the generic
   /// algorithm, so the result is always the same as extract(). Queries with budgets go to extract().
+  /// If the criterion throws, the front is left at the base mesh and the exception propagates.
   QueryStats extract_fast(const Query& q);
 
   /// extract_fast(q) then to_mesh(lattice_ids): the same front and the same triangles (vertex numbering may
   /// differ). For object-error queries without focus or budget (the usual terrain query) both happen in one
   /// descent that writes vertices and triangles as it goes, into arrays sized from the hierarchy's error
   /// histogram (no growth, and no per-point map to fill on a fresh front); other queries take the two calls.
+  /// On an exception the front is left at the base mesh (as extract_fast).
   TriMesh extract_mesh(const Query& q, std::vector<Index>* lattice_ids = nullptr);
 
   /// Frame-to-frame update for a moving camera: the same state update(front, v.to_query()) reaches (which
@@ -250,7 +341,7 @@ class Grid48Front {
   /// field of view, aspect, clipping distances or object error change, it re-evaluates everything. A
   /// diamond the update refines (coarsens) because it is (not) wanted keeps its record in its new set.
   /// Costs 24 bytes per boundary diamond (the record and a copy of the diamond's bound) and 4 per lattice
-  /// point.
+  /// point. Throws InvalidInput as v.validate() (checked before the front changes).
   QueryStats update_view(const ViewQuery& v);
   /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
   template <class Fn> void for_each_triangle(Fn&& fn) const;
@@ -274,6 +365,10 @@ class Grid48Front {
   void descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
                std::uint32_t cy, Wants& wants);
   void clear_refined();
+  // After an exception inside a rebuild of the front: back to the base mesh (refined_ fully cleared, since
+  // the touched list may be incomplete), with the boundary sets to be rebuilt.
+  void restore_base() noexcept;
+  QueryStats extract_fast_unguarded(const Query& q);
   template <bool kClip, bool kEmit>
   QueryStats descend_object(float threshold, TriMesh* out, std::vector<Index>* ids);
   // extract_mesh scratch, uninitialised: valid only for points the running descent made vertices. Holds
@@ -291,7 +386,18 @@ class Grid48Front {
   const Grid48* grid_;
   // 0: not refined; 1: refined. During extract_fast, 2 marks "evaluated, not wanted".
   std::vector<std::uint8_t> refined_;
-  mutable std::vector<Index> vertex_of_point_;  // to_mesh scratch, all kInvalid between calls
+  // to_mesh's lattice point -> vertex map, all kInvalid while not borrowed. One call at a time borrows it
+  // (busy); a concurrent call uses a map of its own. Copies and moves start without one.
+  struct VertexMap {
+    std::vector<Index> map;
+    std::atomic<bool> busy{false};
+    VertexMap() = default;
+    VertexMap(const VertexMap&) {}
+    VertexMap& operator=(const VertexMap&) { return *this; }
+    VertexMap(VertexMap&&) noexcept {}
+    VertexMap& operator=(VertexMap&&) noexcept { return *this; }
+  };
+  mutable VertexMap vertex_map_;
   // Diamonds the last extract_fast evaluated (a superset of the refined ones); room for every point.
   std::vector<Index> touched_;
   std::size_t num_touched_ = 0;
@@ -303,9 +409,11 @@ class Grid48Front {
   // The boundary of the refined set, kept up to date by refine/coarsen_one so that update() touches only
   // it: exposed diamonds (unrefined, with a refined parent or a tile centre: exactly the hypotenuse
   // midpoints of current triangles) and maximal diamonds (refined, no refined child). extract_fast leaves
-  // them stale; they are rebuilt on first use. The two sets are disjoint (one holds unrefined diamonds,
-  // the other refined ones), so one slot per lattice point serves both: slot_[p] is p's index in exposed_
-  // if p is unrefined, in maximal_ if p is refined, kInvalid if p is in neither.
+  // them stale (sets_valid_ false, and then touched_valid_ is true, while slot_ still matches the stale
+  // sets): the next move rebuilds them (for_each_boundary), and the const candidate listings enumerate
+  // the boundary without storing it. The two sets are disjoint (one holds unrefined diamonds, the other
+  // refined ones), so one slot per lattice point serves both: slot_[p] is p's index in exposed_ if p is
+  // unrefined, in maximal_ if p is refined, kInvalid if p is in neither.
   //
   // Per boundary diamond, for update_view: when its last evaluation expires. The status it recorded cannot
   // change while the accumulated camera translation stays below `moved` and the accumulated rotation below
@@ -324,20 +432,20 @@ class Grid48Front {
     std::vector<Expiry> expiry;  // scanned sequentially by update_view every frame (8 bytes per diamond)
     std::vector<Entry> entry;    // parallel: read for stale diamonds, moved between the sets
     std::size_t size() const noexcept { return entry.size(); }
-    void clear() {
+    void clear() noexcept {
       expiry.clear();
       entry.clear();
     }
   };
-  mutable BoundarySet exposed_, maximal_;
-  mutable std::vector<Index> slot_;
+  BoundarySet exposed_, maximal_;
+  std::vector<Index> slot_;
   // During update_view: where on_refined / on_coarsened report diamonds newly added to the sets, and
   // whether a diamond moving from one set to the other keeps its record (update_view refines only diamonds
   // it found wanted and coarsens only ones it found unwanted, so their records stay true in the other set).
   std::vector<Index>* new_exposed_ = nullptr;
   std::vector<Index>* new_maximal_ = nullptr;
   bool carry_records_ = false;
-  mutable bool sets_valid_ = false;
+  bool sets_valid_ = false;
 
   bool view_valid_ = false;
   ViewQuery last_view_{};
@@ -347,9 +455,15 @@ class Grid48Front {
   float step_moved_ = 0.0f, step_turned_ = 0.0f;
   struct ViewContext;
   Entry entry_of(Index p) const noexcept { return {p, grid_->height_at(p), grid_->radius(p), grid_->error(p)}; }
-  void set_add(BoundarySet& s, const Entry& e, Expiry x) const;
-  void set_remove(BoundarySet& s, Index p) const;
-  void rebuild_sets() const;
+  void set_add(BoundarySet& s, const Entry& e, Expiry x);
+  void set_remove(BoundarySet& s, Index p);
+  void rebuild_sets();
+  // The boundary computed from refined_ alone, read-only: exposed(p) and maximal(p) for each diamond of
+  // the two sets, in no particular order. O(touched) from the touched list when touched_valid_ and the
+  // list is short, else O(lattice points) (a scan of the lattice).
+  template <class Exposed, class Maximal> void for_each_boundary(Exposed&& exposed, Maximal&& maximal) const;
+  // to_mesh with a lattice point -> vertex map (all kInvalid; restored before it returns).
+  TriMesh to_mesh_with(Index* remap, std::vector<Index>* lattice_ids) const;
   void on_refined(Index t);
   void on_coarsened(Index t);
   void coarsen_unchecked(Index p);
@@ -363,18 +477,16 @@ class Grid48Front {
 
 // ---- inline implementation -------------------------------------------------------------------------
 
-namespace grid48_detail {
-inline int ctz(std::size_t v) noexcept { return v == 0 ? 62 : __builtin_ctzll(v); }
-}  // namespace grid48_detail
-
 inline bool Grid48::is_node(Index p) const noexcept {
+  VARMESH_ASSERT(p < num_points());
   const std::size_t y = py(p), x = p - y * lw_;
   return (x % tile_) != 0 || (y % tile_) != 0;
 }
 
 inline int Grid48::level(Index p) const noexcept {
+  VARMESH_ASSERT(p < num_points() && is_node(p));
   const std::size_t y = py(p), x = p - y * lw_;
-  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  const int lx = detail::grid48_ctz(x), ly = detail::grid48_ctz(y);
   const int ld = lx < ly ? lx : ly;  // log2 of the diamond size d
   const bool square = lx == ly;      // both x/d and y/d odd
   return 2 * (log2_tile_ - ld) + (square ? 0 : 1) - 2;
@@ -382,8 +494,9 @@ inline int Grid48::level(Index p) const noexcept {
 
 template <class Fn>
 void Grid48::for_each_parent(Index p, Fn&& fn) const {
+  VARMESH_ASSERT(p < num_points() && is_node(p));
   const std::ptrdiff_t y = static_cast<std::ptrdiff_t>(py(p)), x = static_cast<std::ptrdiff_t>(p) - y * static_cast<std::ptrdiff_t>(lw_);
-  const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+  const int lx = detail::grid48_ctz(static_cast<std::size_t>(x)), ly = detail::grid48_ctz(static_cast<std::size_t>(y));
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
   if (lx == ly) {
     // Square diamond: parents are the two corners off its diagonal (edge diamonds of size 2d); tile
@@ -410,8 +523,9 @@ void Grid48::for_each_parent(Index p, Fn&& fn) const {
 
 template <class Fn>
 void Grid48::for_each_child(Index p, Fn&& fn) const {
+  VARMESH_ASSERT(p < num_points() && is_node(p));
   const std::ptrdiff_t y = static_cast<std::ptrdiff_t>(py(p)), x = static_cast<std::ptrdiff_t>(p) - y * static_cast<std::ptrdiff_t>(lw_);
-  const int lx = grid48_detail::ctz(static_cast<std::size_t>(x)), ly = grid48_detail::ctz(static_cast<std::size_t>(y));
+  const int lx = detail::grid48_ctz(static_cast<std::size_t>(x)), ly = detail::grid48_ctz(static_cast<std::size_t>(y));
   const std::ptrdiff_t w = static_cast<std::ptrdiff_t>(lw_), h = static_cast<std::ptrdiff_t>(lh_);
   if (lx == ly) {  // square diamond of size d: children are the midpoints of the square's sides
     const std::ptrdiff_t d = std::ptrdiff_t(1) << lx;
@@ -432,10 +546,11 @@ void Grid48::for_each_child(Index p, Fn&& fn) const {
 }
 
 inline Grid48::Family Grid48::family(Index p) const noexcept {
+  VARMESH_ASSERT(p < num_points() && is_node(p));
   Family f;
   const std::uint32_t w = static_cast<std::uint32_t>(lw_), h = static_cast<std::uint32_t>(lh_);
   const std::uint32_t y = py(p), x = p - y * w;
-  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  const int lx = detail::grid48_ctz(x), ly = detail::grid48_ctz(y);
   // The child at offset (dx, dy) and its other parent at twice that offset. Coordinates are unsigned: a
   // negative one wraps to a value >= w (or h), so one comparison tests both ends.
   std::uint32_t dx[4], dy[4];
@@ -484,9 +599,10 @@ inline Grid48::Family Grid48::family(Index p) const noexcept {
 }
 
 inline bool Grid48::has_refined_child(Index p, const std::uint8_t* refined) const noexcept {
+  VARMESH_ASSERT(p < num_points() && is_node(p));
   const std::uint32_t w = static_cast<std::uint32_t>(lw_), h = static_cast<std::uint32_t>(lh_);
   const std::uint32_t y = py(p), x = p - y * w;
-  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  const int lx = detail::grid48_ctz(x), ly = detail::grid48_ctz(y);
   if (lx == ly) {  // square: the four side midpoints, always in the lattice
     const std::uint32_t d = 1u << lx;
     return (refined[p - d] | refined[p + d] | refined[p - d * w] | refined[p + d * w]) != 0;
@@ -507,9 +623,10 @@ inline bool Grid48::has_refined_child(Index p, const std::uint8_t* refined) cons
 }
 
 inline int Grid48::num_triangles(Index p) const noexcept {
+  VARMESH_ASSERT(p < num_points() && is_node(p));
   int n = 0;
   const std::size_t y = py(p), x = p - y * lw_;
-  const int lx = grid48_detail::ctz(x), ly = grid48_detail::ctz(y);
+  const int lx = detail::grid48_ctz(x), ly = detail::grid48_ctz(y);
   if (lx == ly) return 2;
   const std::size_t d = std::size_t(1) << (lx < ly ? lx : ly);
   if (lx < ly) {
@@ -523,6 +640,7 @@ inline int Grid48::num_triangles(Index p) const noexcept {
 }
 
 inline bool Grid48Front::is_coarsenable(Index p) const noexcept {
+  VARMESH_ASSERT(p < refined_.size());
   if (!refined_[p]) return false;
   bool ok = true;
   grid_->for_each_child(p, [&](Index c) { ok = ok && !refined_[c]; });
@@ -609,16 +727,68 @@ void Grid48Front::for_each_triangle(Fn&& fn) const {
   });
 }
 
+template <class Exposed, class Maximal>
+void Grid48Front::for_each_boundary(Exposed&& exposed, Maximal&& maximal) const {
+  const Grid48& g = *grid_;
+  // The touched list costs a few cache misses per diamond, a scan of the lattice a few nanoseconds per
+  // point (sequential): the list wins below about an eighth of the lattice (measured on 1025^2 and 4097^2
+  // lattices).
+  if (!touched_valid_ || num_touched_ >= g.num_points() / 8) {
+    for (Index p = 0; p < g.num_points(); ++p) {
+      if (!g.is_node(p)) continue;
+      if (refined_[p]) {
+        if (!g.has_refined_child(p, refined_.data())) maximal(p);
+      } else {
+        bool any = g.level(p) == 0;
+        g.for_each_parent(p, [&](Index q) { any = any || refined_[q] != 0; });
+        if (any) exposed(p);
+      }
+    }
+    return;
+  }
+  // Every refined diamond is in the touched list. The unrefined tile centres are exposed; so is every
+  // unrefined child of a refined diamond, listed once: from its smaller refined parent (the other parent
+  // is the co-parent, Grid48::family).
+  const std::size_t s = g.tile_size(), w = g.lattice_width();
+  for (std::size_t ty = 0; ty < g.tiles_y(); ++ty)
+    for (std::size_t tx = 0; tx < g.tiles_x(); ++tx) {
+      const Index c = static_cast<Index>((ty * s + s / 2) * w + tx * s + s / 2);
+      if (!refined_[c]) exposed(c);
+    }
+  for (std::size_t i = 0; i < num_touched_; ++i) {
+    const Index p = touched_[i];
+    if (!refined_[p]) continue;
+    const Grid48::Family f = g.family(p);
+    bool leaf = true;
+    for (int k = 0; k < f.num_children; ++k) {
+      const Index c = f.child[k];
+      if (refined_[c]) {
+        leaf = false;
+      } else {
+        const Index o = f.co_parent[k];
+        if (o == kInvalid || !refined_[o] || p < o) exposed(c);
+      }
+    }
+    if (leaf) maximal(p);
+  }
+}
+
 template <class Fn>
 void Grid48Front::for_each_refine_candidate(Fn&& fn) const {
-  if (!sets_valid_) rebuild_sets();
-  for (const Entry& e : exposed_.entry) fn(e.point);
+  if (sets_valid_) {
+    for (const Entry& e : exposed_.entry) fn(e.point);
+  } else {
+    for_each_boundary([&](Index p) { fn(p); }, [](Index) {});
+  }
 }
 
 template <class Fn>
 void Grid48Front::for_each_coarsen_candidate(Fn&& fn) const {
-  if (!sets_valid_) rebuild_sets();
-  for (const Entry& e : maximal_.entry) fn(e.point);
+  if (sets_valid_) {
+    for (const Entry& e : maximal_.entry) fn(e.point);
+  } else {
+    for_each_boundary([](Index) {}, [&](Index p) { fn(p); });
+  }
 }
 
 }  // namespace varmesh
