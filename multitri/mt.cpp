@@ -474,16 +474,6 @@ Mt MtBuilder::build(const Options& options, std::vector<NodeId>* node_new_to_old
   return mt;
 }
 
-namespace detail {
-ConeCosTable::ConeCosTable() noexcept {
-  const double unit = std::acos(-1.0) / 2.0 / 254.0;
-  for (int i = 0; i < 255; ++i) v[i] = static_cast<float>(std::cos(i * unit));
-  v[255] = -1.0f;
-}
-}  // namespace detail
-
-const detail::ConeCosTable Mt::kConeCos;
-
 namespace {
 
 constexpr double kConeUnit = 1.5707963267948966 / 254.0;  // radians per half-angle code

@@ -29,22 +29,40 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <ranges>
+#include <iterator>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "multitri/bounds.hpp"
+#include "multitri/detail/assert.hpp"
 #include "multitri/types.hpp"
 
 namespace varmesh {
 
 namespace detail {
-/// cos of the packed cone half-angles (code * 90/254 degrees); entry 255 is -1 (any direction).
+/// cos of the packed cone half-angles (code * 90/254 degrees); entry 255 is -1 (any direction). Built at
+/// compile time, so Mt::bound() is usable from any static initialiser (no start-up order to respect). Each
+/// entry is a Taylor series in double rounded to float: cos(x) for x <= 45 degrees, sin(90 degrees - x)
+/// above (no cancellation near 90 degrees, where cos is small); 20 terms are far below double rounding.
 struct ConeCosTable {
   float v[256];
-  ConeCosTable() noexcept;
+  constexpr ConeCosTable() noexcept : v{} {
+    const double unit = 1.5707963267948966 / 254.0;
+    for (int i = 0; i < 255; ++i) {
+      const bool use_sin = i > 127;
+      const double x = (use_sin ? 254 - i : i) * unit, x2 = x * x;
+      double term = use_sin ? x : 1.0, sum = term;
+      for (int k = 1; k <= 20; ++k) {
+        term *= use_sin ? -x2 / double((2 * k) * (2 * k + 1)) : -x2 / double((2 * k - 1) * (2 * k));
+        sum += term;
+      }
+      v[i] = static_cast<float>(sum);
+    }
+    v[255] = -1.0f;
+  }
 };
 }  // namespace detail
 
@@ -64,21 +82,42 @@ class Mt {
   std::size_t num_vertices() const noexcept { return positions_.size(); }
   static constexpr NodeId source() noexcept { return 0; }
 
-  NodeKind kind(NodeId n) const noexcept { return kind_[n]; }
+  // The accessors below that take a node, face or vertex id are unchecked, as vector::operator[] is:
+  // n < num_nodes(), f < num_faces(), v < num_vertices() (VARMESH_ASSERT in debug and sanitizer builds).
+  // A default-constructed or moved-from Mt has no node at all (not even the source).
+
+  NodeKind kind(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < kind_.size());
+    return kind_[n];
+  }
   /// The faces n removes, in increasing order.
   std::span<const FaceId> pre_image(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < kind_.size());
     return {pre_items_.data() + pre_offsets_[n], pre_offsets_[n + 1] - pre_offsets_[n]};
   }
-  FaceId image_begin(NodeId n) const noexcept { return image_begin_[n]; }
-  FaceId image_end(NodeId n) const noexcept { return image_begin_[n + 1]; }
-  std::size_t image_size(NodeId n) const noexcept { return image_begin_[n + 1] - image_begin_[n]; }
-  /// Distinct nodes that create a face of n's pre-image, in increasing order (derived, not stored).
-  ParentRange parents(NodeId n) const noexcept;
+  FaceId image_begin(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < kind_.size());
+    return image_begin_[n];
+  }
+  FaceId image_end(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < kind_.size());
+    return image_begin_[n + 1];
+  }
+  std::size_t image_size(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < kind_.size());
+    return image_begin_[n + 1] - image_begin_[n];
+  }
+  /// Distinct nodes that create a face of n's pre-image, in increasing order (derived, not stored). The
+  /// range refers to this Mt, so it is not available on a temporary one.
+  ParentRange parents(NodeId n) const& noexcept;
+  ParentRange parents(NodeId n) const&& = delete;
   /// Distinct nodes that remove a face of n's image, in the order of their first face in n's image
-  /// (derived, not stored).
-  ChildRange children(NodeId n) const noexcept;
+  /// (derived, not stored; refers to this Mt as parents() does).
+  ChildRange children(NodeId n) const& noexcept;
+  ChildRange children(NodeId n) const&& = delete;
 
   std::array<VertexId, 3> face(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < destroyer_.size());
     if (!wide_corners_.empty()) return {wide_corners_[3 * f], wide_corners_[3 * f + 1], wide_corners_[3 * f + 2]};
     const std::uint64_t w = packed_corners_[f];
     return {static_cast<VertexId>(w & kCornerMask), static_cast<VertexId>((w >> kCornerBits) & kCornerMask),
@@ -87,18 +126,27 @@ class Mt {
   /// The node whose image holds f: a short forward scan of image_begin from a sampled hint (every
   /// 2^kHintShift faces), since images are non-empty and numbered consecutively.
   NodeId creator(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < destroyer_.size());
     NodeId n = creator_hint_[f >> kHintShift];
     while (image_begin_[n + 1] <= f) ++n;
     return n;
   }
-  NodeId destroyer(FaceId f) const noexcept { return destroyer_[f]; }  ///< kInvalid: the drain
+  /// kInvalid: the drain.
+  NodeId destroyer(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < destroyer_.size());
+    return destroyer_[f];
+  }
 
-  const glm::vec3& position(VertexId v) const noexcept { return positions_[v]; }
+  const glm::vec3& position(VertexId v) const noexcept {
+    VARMESH_ASSERT(v < positions_.size());
+    return positions_[v];
+  }
   const std::vector<glm::vec3>& positions() const noexcept { return positions_; }
   /// The node's bound, decoded from its 16-byte packed form (see PackedBound). Conservative: the decoded
   /// sphere and cone contain the exact ones, the error is exact; decoded bounds are nested (a child's
   /// sphere inside its parent's, its cone inside its parent's) when the builder saturates.
   ElementBound bound(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < bounds_.size());
     const PackedBound& p = bounds_[n];
     ElementBound b;
     b.center = frame_.center(p.c);
@@ -140,12 +188,16 @@ class Mt {
     const float len = std::sqrt(x * x + y * y + z * z);
     return {x / len, y / len, z / len};
   }
-  static float cone_cos(unsigned angle_code) noexcept { return kConeCos.v[angle_code]; }
+  /// Unchecked: angle_code <= 255.
+  static constexpr float cone_cos(unsigned angle_code) noexcept {
+    VARMESH_ASSERT(angle_code <= 255u);
+    return kConeCos.v[angle_code];
+  }
 
  private:
   friend class MtBuilder;
   static constexpr int kHintShift = 4;
-  static const detail::ConeCosTable kConeCos;
+  static constexpr detail::ConeCosTable kConeCos{};
 
   /// 16 bytes per node: centre quantized to 16 bits per axis on the vertices' box, radius as a 16-bit
   /// float (5-bit exponent, 11-bit mantissa) in units of the box diagonal, exact error, and the normal cone
@@ -183,13 +235,19 @@ class Mt {
   Frame frame_;
 };
 
-/// Forward ranges over derived relations (empty() and front() from view_interface; size() counts).
-class Mt::ParentRange : public std::ranges::view_interface<Mt::ParentRange> {
+/// Forward ranges over derived relations (std::ranges::forward_range; written out rather than derived from
+/// std::ranges::view_interface, which clang 14 cannot instantiate with libstdc++ 12). empty() and front()
+/// are O(1); size() walks the range.
+class Mt::ParentRange {
  public:
   class iterator {
    public:
+    using iterator_concept = std::forward_iterator_tag;
+    using iterator_category = std::input_iterator_tag;  // operator* returns a value, not a reference
     using value_type = NodeId;
     using difference_type = std::ptrdiff_t;
+    using reference = NodeId;
+    using pointer = void;
     iterator() = default;
     iterator(const Mt* mt, const FaceId* p, const FaceId* end) noexcept : mt_(mt), p_(p), end_(end) {
       if (p_ != end_) cur_ = mt_->creator(*p_);
@@ -214,19 +272,35 @@ class Mt::ParentRange : public std::ranges::view_interface<Mt::ParentRange> {
   ParentRange(const Mt* mt, std::span<const FaceId> pre) noexcept : mt_(mt), pre_(pre) {}
   iterator begin() const noexcept { return {mt_, pre_.data(), pre_.data() + pre_.size()}; }
   iterator end() const noexcept { return {mt_, pre_.data() + pre_.size(), pre_.data() + pre_.size()}; }
-  std::size_t size() const noexcept { return static_cast<std::size_t>(std::ranges::distance(begin(), end())); }
+  bool empty() const noexcept { return pre_.empty(); }
+  explicit operator bool() const noexcept { return !empty(); }
+  /// The first parent. Unchecked: !empty().
+  NodeId front() const noexcept {
+    VARMESH_ASSERT(!empty());
+    return *begin();
+  }
+  /// O(number of parents).
+  std::size_t size() const noexcept {
+    std::size_t n = 0;
+    for (iterator it = begin(), e = end(); it != e; ++it) ++n;
+    return n;
+  }
 
  private:
   const Mt* mt_;
   std::span<const FaceId> pre_;
 };
 
-class Mt::ChildRange : public std::ranges::view_interface<Mt::ChildRange> {
+class Mt::ChildRange {
  public:
   class iterator {
    public:
+    using iterator_concept = std::forward_iterator_tag;
+    using iterator_category = std::input_iterator_tag;  // operator* returns a value, not a reference
     using value_type = NodeId;
     using difference_type = std::ptrdiff_t;
+    using reference = NodeId;
+    using pointer = void;
     iterator() = default;
     iterator(const Mt* mt, FaceId f, FaceId b, FaceId e) noexcept : mt_(mt), f_(f), b_(b), e_(e) { settle(); }
     NodeId operator*() const noexcept { return mt_->destroyer(f_); }
@@ -262,15 +336,28 @@ class Mt::ChildRange : public std::ranges::view_interface<Mt::ChildRange> {
   ChildRange(const Mt* mt, FaceId b, FaceId e) noexcept : mt_(mt), b_(b), e_(e) {}
   iterator begin() const noexcept { return {mt_, b_, b_, e_}; }
   iterator end() const noexcept { return {mt_, e_, b_, e_}; }
-  std::size_t size() const noexcept { return static_cast<std::size_t>(std::ranges::distance(begin(), end())); }
+  /// O(image size): no child when no face of the image is removed.
+  bool empty() const noexcept { return begin() == end(); }
+  explicit operator bool() const noexcept { return !empty(); }
+  /// The first child. Unchecked: !empty().
+  NodeId front() const noexcept {
+    VARMESH_ASSERT(!empty());
+    return *begin();
+  }
+  /// O(image size + the children's pre-images).
+  std::size_t size() const noexcept {
+    std::size_t n = 0;
+    for (iterator it = begin(), e = end(); it != e; ++it) ++n;
+    return n;
+  }
 
  private:
   const Mt* mt_;
   FaceId b_, e_;
 };
 
-inline Mt::ParentRange Mt::parents(NodeId n) const noexcept { return {this, pre_image(n)}; }
-inline Mt::ChildRange Mt::children(NodeId n) const noexcept { return {this, image_begin_[n], image_begin_[n + 1]}; }
+inline Mt::ParentRange Mt::parents(NodeId n) const& noexcept { return {this, pre_image(n)}; }
+inline Mt::ChildRange Mt::children(NodeId n) const& noexcept { return {this, image_begin(n), image_end(n)}; }
 
 /// Builds an Mt from modifications given in any order, checks the definition and renumbers.
 ///

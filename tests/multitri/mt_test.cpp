@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ranges>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "multitri/errors.hpp"
@@ -331,6 +333,71 @@ TEST(Mt, RenumbersParentsFirst) {
   const auto& cb = mt.bound(2);
   EXPECT_LE(glm::length(cb.center - pb.center) + cb.radius, pb.radius * 1.0001f);
 }
+
+
+// The derived relations are plain forward ranges, written without std::ranges::view_interface (which
+// clang 14 cannot instantiate with libstdc++ 12; the public_headers_compile_alone test compiles mt.hpp
+// alone with the configured compiler).
+static_assert(std::ranges::forward_range<Mt::ParentRange>);
+static_assert(std::ranges::forward_range<Mt::ChildRange>);
+// They point at their Mt: not available on a temporary one.
+template <class M>
+concept HasParents = requires(M&& mt) { std::forward<M>(mt).parents(NodeId{0}); };
+template <class M>
+concept HasChildren = requires(M&& mt) { std::forward<M>(mt).children(NodeId{0}); };
+static_assert(HasParents<const Mt&> && HasChildren<const Mt&>);
+static_assert(!HasParents<Mt> && !HasChildren<Mt>);
+
+TEST(Mt, ParentAndChildRangesAnswerEmptyFrontAndSize) {
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  s.b.add_node(NodeKind::kSplit, removed, s.c, 0.25f);
+  const Mt mt = std::move(s.b).build();
+  EXPECT_TRUE(mt.parents(0).empty());
+  EXPECT_EQ(mt.parents(0).size(), 0u);
+  EXPECT_FALSE(mt.children(0).empty());
+  EXPECT_TRUE(static_cast<bool>(mt.children(0)));
+  EXPECT_EQ(mt.children(0).size(), 1u);
+  EXPECT_EQ(mt.children(0).front(), 1u);
+  EXPECT_TRUE(mt.children(1).empty());
+  EXPECT_FALSE(static_cast<bool>(mt.children(1)));
+  const auto parents = mt.parents(1);
+  const std::vector<NodeId> listed(parents.begin(), parents.end());
+  EXPECT_EQ(listed, std::vector<NodeId>{0});
+  EXPECT_EQ(std::ranges::distance(mt.children(0)), 1);
+}
+
+// The cone table is a constant expression: a static initialiser of any translation unit may decode bounds.
+constinit const float kConeCosOfRightAngle = Mt::cone_cos(254);
+static_assert(Mt::cone_cos(0) == 1.0f);
+static_assert(Mt::cone_cos(Mt::kFullConeCode) == -1.0f);
+
+TEST(Mt, ConeCosTableIsTheCosineOfEachCode) {
+  const double unit = std::acos(-1.0) / 2.0 / 254.0;
+  for (unsigned i = 0; i < 254; ++i)
+    EXPECT_EQ(Mt::cone_cos(i), static_cast<float>(std::cos(i * unit))) << "code " << i;
+  EXPECT_EQ(kConeCosOfRightAngle, 0.0f);  // 90 degrees exactly (std::cos of the double pi/2 gives 6e-17)
+  for (unsigned i = 0; i + 1 < 255; ++i) EXPECT_GT(Mt::cone_cos(i), Mt::cone_cos(i + 1)) << "code " << i;
+}
+
+#if defined(VARMESH_ENABLE_ASSERTS) || !defined(NDEBUG)
+TEST(MtDeathTest, UncheckedAccessorsAssertTheirPrecondition) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  Square s;
+  const FaceId removed[] = {s.t0, s.t1};
+  s.b.add_node(NodeKind::kSplit, removed, s.c, 0.25f);
+  const Mt mt = std::move(s.b).build();
+  const auto nn = static_cast<NodeId>(mt.num_nodes());
+  const auto nf = static_cast<FaceId>(mt.num_faces());
+  EXPECT_DEATH((void)mt.bound(nn), "precondition violated");
+  EXPECT_DEATH((void)mt.pre_image(nn), "precondition violated");
+  EXPECT_DEATH((void)mt.children(nn), "precondition violated");
+  EXPECT_DEATH((void)mt.face(nf), "precondition violated");
+  EXPECT_DEATH((void)mt.destroyer(nf), "precondition violated");
+  EXPECT_DEATH((void)mt.position(static_cast<VertexId>(mt.num_vertices())), "precondition violated");
+  EXPECT_DEATH((void)mt.children(1).front(), "precondition violated");
+}
+#endif
 
 }  // namespace
 }  // namespace varmesh
