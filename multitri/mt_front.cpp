@@ -7,7 +7,10 @@
 
 namespace varmesh {
 
-MtFront::MtFront(const Mt& mt) : mt_(&mt) { reset(); }
+MtFront::MtFront(const Mt& mt) : mt_(&mt) {
+  if (mt.num_nodes() == 0) throw InvalidInput("MtFront: the Mt is empty (default-constructed or moved-from)");
+  reset();
+}
 
 void MtFront::reset() {
   applied_.assign(mt_->num_nodes(), 0);

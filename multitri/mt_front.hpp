@@ -12,10 +12,15 @@
 /// holds no per-node counters. The front keeps its refine candidates (unapplied nodes with a pre-image face
 /// in the front) and coarsen candidates (undoable nodes) in two lists maintained by apply/undo, so that a
 /// query lists them in O(their number) instead of walking every face of the front.
+///
+/// Lifetime: a front keeps a pointer to its Mt, which must outlive it (and not move). Constructing a front
+/// from a temporary Mt does not compile.
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <vector>
 
+#include "multitri/detail/assert.hpp"
 #include "multitri/mt.hpp"
 #include "multitri/tri_mesh.hpp"
 
@@ -23,14 +28,26 @@ namespace varmesh {
 
 class MtFront {
  public:
-  /// The coarsest front: only the source applied (the base mesh).
+  /// The coarsest front: only the source applied (the base mesh). The front refers to `mt` (see the file
+  /// comment). Throws InvalidInput when mt has no node (default-constructed or moved-from).
   explicit MtFront(const Mt& mt);
+  /// A front would dangle on a temporary Mt.
+  explicit MtFront(const Mt&& mt) = delete;
 
   const Mt& mt() const noexcept { return *mt_; }
-  bool is_applied(NodeId n) const noexcept { return applied_[n] != 0; }
+
+  // is_applied, can_apply, can_undo, is_refined, is_coarsenable and element_bound are unchecked:
+  // n < mt().num_nodes(); has_face: f < mt().num_faces() (as vector::operator[]; VARMESH_ASSERT in debug and
+  // sanitizer builds). The moves (apply, undo, refine, coarsen) check and throw.
+
+  bool is_applied(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < applied_.size());
+    return applied_[n] != 0;
+  }
   /// Legal when not applied and every pre-image face is current (a pre-image face is absent exactly when
   /// its creator is not applied, since its only remover is n). O(pre-image size), no per-node counters.
   bool can_apply(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < applied_.size());
     if (applied_[n]) return false;
     for (FaceId g : mt_->pre_image(n))
       if (!has_face(g)) return false;
@@ -38,6 +55,7 @@ class MtFront {
   }
   /// Legal when applied and every image face is current (none removed by an applied child).
   bool can_undo(NodeId n) const noexcept {
+    VARMESH_ASSERT(n < applied_.size());
     if (n == 0 || !applied_[n]) return false;
     for (FaceId f = mt_->image_begin(n); f < mt_->image_end(n); ++f)
       if (!has_face(f)) return false;
@@ -60,7 +78,10 @@ class MtFront {
   std::size_t num_faces() const noexcept { return faces_.size(); }
   std::size_t num_applied() const noexcept { return num_applied_; }
   std::span<const FaceId> faces() const noexcept { return faces_; }
-  bool has_face(FaceId f) const noexcept { return slot_[f] != kInvalid; }
+  bool has_face(FaceId f) const noexcept {
+    VARMESH_ASSERT(f < slot_.size());
+    return slot_[f] != kInvalid;
+  }
 
   /// The current mesh with compact vertex numbering; `face_ids` (optional) receives the Mt face of each
   /// output face, `vertex_ids` the Mt vertex of each output vertex.
@@ -71,7 +92,7 @@ class MtFront {
 
   // The RefinableFront interface used by extract()/update() (query.hpp).
   ElementBound element_bound(NodeId n) const noexcept { return mt_->bound(n); }
-  bool is_refined(NodeId n) const noexcept { return applied_[n] != 0; }
+  bool is_refined(NodeId n) const noexcept { return is_applied(n); }
   std::uint64_t tie_key(NodeId n) const noexcept { return n; }
   /// Each node that is not applied and has a pre-image face in the front, once (fn must not move the front).
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {

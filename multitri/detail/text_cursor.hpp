@@ -98,9 +98,11 @@ inline std::string quote(std::string_view s) {
 
 class TextCursor {
  public:
-  /// `comment` (0 = none) starts a comment that runs to the end of the line when it begins a token.
+  /// `comment` (0 = none) starts a comment that runs to the end of the line when it begins a token. The
+  /// cursor refers to `text` and `file`, which must outlive it (a temporary file name does not compile).
   TextCursor(std::string_view text, const std::string& file, char comment = '\0') noexcept
       : begin_(text.data()), p_(text.data()), end_(text.data() + text.size()), file_(file), comment_(comment) {}
+  TextCursor(std::string_view text, const std::string&& file, char comment = '\0') = delete;
 
   bool at_end() const noexcept { return p_ == end_; }
   std::size_t line() const noexcept { return line_; }

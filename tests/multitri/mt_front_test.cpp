@@ -8,6 +8,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "multitri/errors.hpp"
@@ -425,6 +426,38 @@ TEST(MtFront, ManyFrontsShareOneMt) {
   a.validate();
   c.validate();
 }
+
+
+// A front points at its Mt: binding one to a temporary would dangle, so it does not compile.
+static_assert(std::is_constructible_v<MtFront, const Mt&>);
+static_assert(std::is_constructible_v<MtFront, Mt&>);
+static_assert(!std::is_constructible_v<MtFront, Mt&&>);
+static_assert(!std::is_constructible_v<MtFront, const Mt&&>);
+static_assert(!std::is_constructible_v<MtFront, Mt>);
+
+TEST(MtFront, RefusesAnEmptyMt) {
+  const Mt empty;
+  try {
+    MtFront f(empty);
+    FAIL() << "an empty Mt was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("empty"), std::string::npos) << e.what();
+  }
+}
+
+#if defined(VARMESH_ENABLE_ASSERTS) || !defined(NDEBUG)
+TEST(MtFrontDeathTest, UncheckedAccessorsAssertTheirPrecondition) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const testing::GridMt g = make_grid_mt(GridMtOptions{});
+  const MtFront f(g.mt);
+  const auto nn = static_cast<NodeId>(g.mt.num_nodes());
+  EXPECT_DEATH((void)f.is_applied(nn), "precondition violated");
+  EXPECT_DEATH((void)f.can_apply(1000000), "precondition violated");
+  EXPECT_DEATH((void)f.can_undo(nn), "precondition violated");
+  EXPECT_DEATH((void)f.has_face(static_cast<FaceId>(g.mt.num_faces())), "precondition violated");
+  EXPECT_DEATH((void)f.element_bound(nn), "precondition violated");
+}
+#endif
 
 }  // namespace
 }  // namespace varmesh
