@@ -2,6 +2,8 @@
 #include "multitri/mt_io.hpp"
 
 #include <cstring>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "multitri/detail/binary_codec.hpp"
@@ -16,6 +18,7 @@ constexpr std::uint32_t kVersion = 1;
 }  // namespace
 
 std::string encode_mt(const Mt& mt) {
+  if (mt.num_nodes() == 0) throw InvalidInput("encode_mt: the Mt is empty (default-constructed or moved-from)");
   detail::Writer w;
   w.reserve(sizeof kMagic + 24 + 12 * mt.num_vertices() + 12 * mt.num_faces() + 13 * mt.num_nodes() +
             4 * mt.num_faces() + 8);

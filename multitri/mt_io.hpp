@@ -19,14 +19,16 @@
 
 namespace varmesh {
 
-/// Encodes `mt` (O(size)).
+/// Encodes `mt` (O(size)). Throws InvalidInput for an Mt with no node (default-constructed or moved-from:
+/// it has no source, and MtBuilder never builds one).
 std::string encode_mt(const Mt& mt);
 /// Decodes; `name` is used in error messages. Throws IoError (name, byte offset, reason) on a bad magic,
 /// an unsupported version, a truncated file, counts larger than the file can hold (checked before any
 /// allocation), non-finite numbers, a checksum mismatch, or an MT that MtBuilder rejects.
 Mt decode_mt(std::string_view bytes, const std::string& name);
 
-/// Writes atomically (temporary file + rename): a failure leaves no file. Throws IoError.
+/// Writes atomically (temporary file + rename): a failure leaves no file. Throws InvalidInput as encode_mt
+/// does (before touching the file system) and IoError.
 void write_mt(const std::string& path, const Mt& mt);
 /// Reads and decodes. Throws IoError as decode_mt does (and when the file cannot be read).
 Mt read_mt(const std::string& path);

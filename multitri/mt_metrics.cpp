@@ -9,7 +9,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
+#include <string>
 
 #include "multitri/errors.hpp"
 
@@ -54,13 +54,16 @@ BigUint& BigUint::operator+=(const BigUint& other) {
 }
 
 BigUint& BigUint::operator-=(std::uint64_t value) {
+  // No leading zero limb: a value of two or more limbs is at least 2^64 > value.
+  if (limbs_.size() <= 1 && low_u64() < value)
+    throw InvalidInput("BigUint: subtracting " + std::to_string(value) + " from " + std::to_string(low_u64()) +
+                       " would go below zero");
   std::uint64_t borrow = value;
   for (std::size_t i = 0; i < limbs_.size() && borrow != 0; ++i) {
     const std::uint64_t old = limbs_[i];
     limbs_[i] = old - borrow;
     borrow = old < borrow ? 1 : 0;
   }
-  if (borrow != 0) throw std::underflow_error("BigUint: subtraction below zero");
   trim();
   return *this;
 }
@@ -217,6 +220,7 @@ ChainGrowth chain_growth(const Mt& mt, std::size_t max_nodes) {
 }
 
 LevelFrontCount count_level_fronts(const Mt& mt) {
+  if (mt.num_nodes() == 0) throw InvalidInput("count_level_fronts: the Mt is empty (no source)");
   LevelFrontCount r;
   const std::vector<Index> level = compute_node_levels(mt);
   // Independence of one level given the lower ones: no node has a parent on its own level or above.
@@ -299,7 +303,8 @@ void add_into(std::uint64_t* dst, const std::uint64_t* src, std::size_t limbs) n
 FrontCount expressive_power(const Mt& mt, const FrontCountOptions& options) {
   FrontCount result;
   const std::size_t nn = mt.num_nodes();
-  if (nn <= 1) {
+  if (nn == 0) throw InvalidInput("expressive_power: the Mt is empty (no source)");
+  if (nn == 1) {
     result.exact = true;
     result.value = BigUint(1);
     result.log2 = 0.0;

@@ -10,6 +10,10 @@
 ///   and the implicit drain are not counted; the paper's lattice path then has depth + 2 nodes).
 /// - a front = an order ideal of the DAG (a set of nodes containing the source and closed under parents);
 ///   fronts and conforming meshes extractable from the Mt are in one-to-one correspondence (non-redundancy).
+///
+/// An empty Mt (no node, not even the source: default-constructed or moved-from; MtBuilder never builds
+/// one) has no front at all. compute_metrics() reports it as all zeros and chain_growth() as not computed;
+/// expressive_power() and count_level_fronts(), whose answers count fronts, throw InvalidInput for it.
 #include <compare>
 #include <cstddef>
 #include <cstdint>
@@ -32,7 +36,7 @@ class BigUint {
   static BigUint pow2(std::size_t k);
 
   BigUint& operator+=(const BigUint& other);
-  /// Precondition: *this >= value (throws std::underflow_error otherwise).
+  /// Throws InvalidInput when value > *this (the result would be negative), leaving *this unchanged.
   BigUint& operator-=(std::uint64_t value);
   BigUint& operator*=(const BigUint& other);
   friend BigUint operator+(BigUint a, const BigUint& b) { return a += b; }
@@ -146,7 +150,8 @@ struct FrontCountOptions {
 /// options' limits it returns exact = false with log2 bounds instead. For scale: a tetrahedron bisected 6
 /// times (126 nodes, frontier 24, 28k states) takes ~0.05 s; 7 times (254 nodes, 2.9M states) ~30 s and
 /// ~300 MB, past the default limits (refused after ~5 s).
-/// Never throws for a valid Mt (std::bad_alloc aside).
+/// Throws InvalidInput for an empty Mt (see the header comment); never throws for a valid Mt (std::bad_alloc
+/// aside).
 FrontCount expressive_power(const Mt& mt, const FrontCountOptions& options = {});
 
 /// Fronts counted by eq. 4 of Velho-Gomes (section 7.2).
@@ -163,8 +168,8 @@ struct LevelFrontCount {
 
 /// Eq. 4 count. Every such set is a front because a node's parents all lie on lower levels, so the nodes of
 /// level j are pairwise independent given levels < j; the function re-checks this (throws InvalidInput
-/// naming the node if a parent is not on a lower level, which a valid Mt never triggers). O(nodes + arcs +
-/// digits of the result).
+/// naming the node if a parent is not on a lower level, which a valid Mt never triggers; and for an empty
+/// Mt). O(nodes + arcs + digits of the result).
 LevelFrontCount count_level_fronts(const Mt& mt);
 
 }  // namespace varmesh

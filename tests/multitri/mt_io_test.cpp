@@ -140,5 +140,13 @@ TEST(MtIo, EditedFacesBehindAValidChecksumGiveConformingFronts) {
   std::printf("edited files: %zu refused, %zu accepted\n", refused, accepted);
 }
 
+
+TEST(MtIo, AnEmptyMtIsRefusedBeforeAnyFileIsWritten) {
+  EXPECT_THROW(encode_mt(Mt{}), InvalidInput);
+  const auto path = testing::scratch_dir("mt_io_empty") / "empty.vrm";
+  EXPECT_THROW(write_mt(path.string(), Mt{}), InvalidInput);
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
 }  // namespace
 }  // namespace varmesh

@@ -45,7 +45,7 @@ TEST(MtMetricsBigUint, Arithmetic) {
   EXPECT_NEAR((BigUint::pow2(100) + BigUint::pow2(99)).log2(), 100.0 + std::log2(1.5), 1e-12);
   EXPECT_TRUE(std::isinf(BigUint().log2()));
   BigUint z;
-  EXPECT_THROW(z -= 1, std::underflow_error);
+  EXPECT_THROW(z -= 1, InvalidInput);
 }
 
 // --- hand-made MTs -------------------------------------------------------------------------------------
@@ -336,6 +336,33 @@ TEST(MtMetrics, RefusalGivesBounds) {
   const FrontCount w = expressive_power(sq, o);
   EXPECT_FALSE(w.exact);
   EXPECT_NEAR(w.log2, std::log2(6.0), 1e-12);
+}
+
+
+TEST(MtMetrics, AnEmptyMtHasNoFrontToCount) {
+  const Mt empty;
+  EXPECT_THROW(expressive_power(empty), InvalidInput);
+  EXPECT_THROW(count_level_fronts(empty), InvalidInput);
+  const MtMetrics m = compute_metrics(empty);
+  EXPECT_EQ(m.nodes, 0u);
+  EXPECT_EQ(m.faces, 0u);
+  EXPECT_EQ(m.depth, 0u);
+  EXPECT_FALSE(chain_growth(empty).computed);
+}
+
+TEST(BigUint, SubtractingBelowZeroThrowsInvalidInputAndKeepsTheValue) {
+  BigUint b(3);
+  EXPECT_THROW(b -= 5, InvalidInput);
+  EXPECT_EQ(b, BigUint(3));
+  BigUint zero;
+  EXPECT_THROW(zero -= 1, InvalidInput);
+  zero -= 0;
+  EXPECT_TRUE(zero.is_zero());
+  BigUint big = BigUint::pow2(64);
+  big -= 1;
+  EXPECT_EQ(big, BigUint(UINT64_MAX));
+  big -= UINT64_MAX;
+  EXPECT_TRUE(big.is_zero());
 }
 
 }  // namespace
