@@ -2,8 +2,39 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+
+#include "multitri/errors.hpp"
 
 namespace varmesh {
+
+namespace {
+bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+}  // namespace
+
+void FocusSet::validate() const {
+  auto fail = [](const char* shape, std::size_t i, const char* why) {
+    throw InvalidInput(std::string("focus set: ") + shape + " " + std::to_string(i) + " " + why, i);
+  };
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    if (!finite3(boxes[i].lo) || !finite3(boxes[i].hi)) fail("box", i, "has a corner that is not finite");
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    if (!finite3(spheres[i].center)) fail("sphere", i, "has a centre that is not finite");
+    if (!std::isfinite(spheres[i].radius) || !(spheres[i].radius >= 0.0f))
+      fail("sphere", i, "has a radius that is negative or not finite");
+  }
+  for (std::size_t i = 0; i < frusta.size(); ++i) {
+    try {
+      frusta[i].validate();
+    } catch (const InvalidInput& e) {
+      throw InvalidInput("focus set: frustum " + std::to_string(i) + ": " + e.what(), i);
+    }
+  }
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!finite3(points[i])) fail("point", i, "is not finite");
+  if (!std::isfinite(point_radius) || !(point_radius >= 0.0f))
+    throw InvalidInput("focus set: point_radius " + std::to_string(point_radius) + " is negative or not finite");
+}
 
 // Distances in double, results in float: |d|^2 of float vectors overflows past coordinates of ~1.8e19 (and
 // would make every sphere of a model that large infinite).

@@ -56,7 +56,14 @@ struct FocusSet {
   std::vector<Sphere> spheres;
   std::vector<Frustum> frusta;
   std::vector<glm::vec3> points;  ///< a point meets an element whose sphere contains it (+ point_radius)
-  float point_radius = 0.0f;
+  float point_radius = 0.0f;  ///< >= 0
+
+  /// Throws InvalidInput naming the shape (its index in its list) when a box corner, a sphere, a point or a
+  /// frustum plane is not finite (Frustum::validate), or a sphere's radius or point_radius is negative. A NaN
+  /// shape would otherwise meet every element (or none) without a word. A box with lo > hi is allowed (it
+  /// meets nothing). O(number of shapes); extract() and update() (query.hpp) call it through
+  /// Query::validate().
+  void validate() const;
 
   bool everywhere() const noexcept {
     return boxes.empty() && spheres.empty() && frusta.empty() && points.empty();

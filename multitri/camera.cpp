@@ -38,6 +38,15 @@ void Camera::validate() const {
                        " must satisfy 0 < z_near < z_far (finite)");
 }
 
+void Frustum::validate() const {
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    const Plane& p = planes[i];
+    if (!std::isfinite(p.n.x) || !std::isfinite(p.n.y) || !std::isfinite(p.n.z) || !std::isfinite(p.d))
+      throw InvalidInput("frustum: plane " + std::to_string(i) + " is not finite", i);
+    if (p.n == glm::vec3(0.0f)) throw InvalidInput("frustum: plane " + std::to_string(i) + " has a zero normal", i);
+  }
+}
+
 glm::vec3 Camera::view_up() const {
   const glm::vec3 d = target - eye;
   const float len = glm::length(d);
@@ -57,6 +66,7 @@ float Camera::pixels_per_unit_at_distance_one(float viewport_height) const {
 }
 
 Frustum Camera::frustum() const {
+  validate();
   // Gribb-Hartmann extraction from the clip matrix: each plane is a sum or difference of matrix rows. In
   // double: with z_far / z_near near 1e8 the far plane's rows cancel in float (a NaN plane culls nothing).
   const glm::dmat4 m = glm::perspective(glm::radians(double(fov_y_deg)), double(aspect), double(z_near), double(z_far)) *
@@ -70,6 +80,7 @@ Frustum Camera::frustum() const {
     const double len = glm::length(n);
     f.planes[static_cast<std::size_t>(i)] = Plane{glm::vec3(n / len), static_cast<float>(raw[i].w / len)};
   }
+  f.validate();  // a valid camera far beyond float range can still overflow an offset
   return f;
 }
 

@@ -27,6 +27,11 @@ struct Frustum {
     return in;
   }
   bool contains_point(const glm::vec3& p) const noexcept { return intersects_sphere(p, 0.0f); }
+  /// Throws InvalidInput naming the plane (0..5) when a plane's normal or offset is not finite or its normal
+  /// is zero. Such a plane never excludes anything (every comparison with NaN is false), so a frustum from
+  /// a broken camera would silently mean "everywhere". Criterion::outside_frustum, the frusta of a focus set
+  /// (FocusSet::validate) and intersect_region call it.
+  void validate() const;
 };
 
 /// A perspective camera. Angles in degrees; `aspect` = width / height.
@@ -49,6 +54,9 @@ struct Camera {
   /// The up vector view() uses (see above).
   glm::vec3 view_up() const;
   glm::mat4 projection() const;
+  /// The view frustum of projection() * view(). Calls validate() first (throws InvalidInput). view(),
+  /// view_up(), projection(), forward() and pixels_per_unit_at_distance_one() do not check: on a camera that
+  /// fails validate() they return NaN or meaningless values.
   Frustum frustum() const;
   /// Pixels per unit of world length seen at distance 1 on a viewport `viewport_height` pixels high.
   float pixels_per_unit_at_distance_one(float viewport_height) const;

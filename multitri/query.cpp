@@ -94,6 +94,11 @@ inline bool screen_fine(const ElementBound& b, const glm::vec3& eye, float ratio
 // Rounding slack for margins computed from lengths of about `scale`.
 float rounding(float scale) { return 1e-5f * scale + 1e-30f; }
 
+void check_point(const glm::vec3& p, const char* what, std::uint64_t element = InvalidInput::kNoElement) {
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+    throw InvalidInput(std::string(what) + " is not finite", element);
+}
+
 }  // namespace
 
 Criterion Criterion::object_error(float max_error) {
@@ -105,8 +110,10 @@ Criterion Criterion::object_error(float max_error) {
 }
 
 Criterion Criterion::screen_error(const Camera& camera, float viewport_height, float max_pixels) {
+  camera.validate();
   if (!(max_pixels > 0.0f)) throw InvalidInput("screen_error: the pixel threshold must be > 0");
-  if (!(viewport_height > 0.0f)) throw InvalidInput("screen_error: the viewport height must be > 0");
+  if (!(viewport_height > 0.0f) || !std::isfinite(viewport_height))
+    throw InvalidInput("screen_error: the viewport height must be > 0 and finite");
   Criterion c;
   c.kind_ = Kind::kScreenError;
   c.value_ = max_pixels;
@@ -117,6 +124,7 @@ Criterion Criterion::screen_error(const Camera& camera, float viewport_height, f
 }
 
 Criterion Criterion::outside_frustum(const Frustum& frustum) {
+  frustum.validate();
   Criterion c;
   c.kind_ = Kind::kOutsideFrustum;
   c.frustum_ = frustum;
@@ -124,6 +132,7 @@ Criterion Criterion::outside_frustum(const Frustum& frustum) {
 }
 
 Criterion Criterion::back_facing(const glm::vec3& eye) {
+  check_point(eye, "back_facing: the eye");
   Criterion c;
   c.kind_ = Kind::kBackFacing;
   c.point_ = eye;
@@ -131,6 +140,7 @@ Criterion Criterion::back_facing(const glm::vec3& eye) {
 }
 
 Criterion Criterion::away_from_silhouette(const glm::vec3& eye) {
+  check_point(eye, "away_from_silhouette: the eye");
   Criterion c;
   c.kind_ = Kind::kAwayFromSilhouette;
   c.point_ = eye;
@@ -138,7 +148,9 @@ Criterion Criterion::away_from_silhouette(const glm::vec3& eye) {
 }
 
 Criterion Criterion::away_from_points(std::vector<glm::vec3> points, float radius) {
-  if (!(radius >= 0.0f)) throw InvalidInput("away_from_points: the radius must be >= 0");
+  if (!(radius >= 0.0f) || !std::isfinite(radius))
+    throw InvalidInput("away_from_points: the radius must be >= 0 and finite");
+  for (std::size_t i = 0; i < points.size(); ++i) check_point(points[i], "away_from_points: a point", i);
   Criterion c;
   c.kind_ = Kind::kAwayFromPoints;
   c.points_ = std::move(points);

@@ -43,20 +43,26 @@ class Criterion {
     kCustom, kAllOf, kAnyOf
   };
 
-  /// Fine when bound.error <= max_error (object units).
+  /// Fine when bound.error <= max_error (object units; +infinity: always fine). Throws InvalidInput when
+  /// max_error is negative or NaN.
   static Criterion object_error(float max_error);
   /// Fine when the error projected on the screen is <= max_pixels, for a perspective camera and a viewport
   /// `viewport_height` pixels high: error * pixels_per_unit_at_distance_one / distance(eye, sphere).
-  /// Inside the sphere (distance <= 0) nothing is fine unless error is 0.
+  /// Inside the sphere (distance <= 0) nothing is fine unless error is 0. Throws InvalidInput when the
+  /// camera fails Camera::validate(), max_pixels <= 0 or viewport_height is not positive and finite.
   static Criterion screen_error(const Camera& camera, float viewport_height, float max_pixels);
-  /// Fine when the bounding sphere lies entirely outside the frustum (refine only what is visible).
+  /// Fine when the bounding sphere lies entirely outside the frustum (refine only what is visible). Throws
+  /// InvalidInput when the frustum fails Frustum::validate() (a NaN plane would cull nothing).
   static Criterion outside_frustum(const Frustum& frustum);
-  /// Fine when every normal of the cone faces away from `eye` at every point of the sphere.
+  /// Fine when every normal of the cone faces away from `eye` at every point of the sphere. Throws
+  /// InvalidInput for a non-finite eye.
   static Criterion back_facing(const glm::vec3& eye);
   /// Fine when the region is entirely front-facing or entirely back-facing as seen from `eye` (refine only
-  /// near silhouettes). Elements without normal information are never fine.
+  /// near silhouettes). Elements without normal information are never fine. Throws InvalidInput for a
+  /// non-finite eye.
   static Criterion away_from_silhouette(const glm::vec3& eye);
-  /// Fine when the sphere is farther than `radius` from every point (refine near feature points).
+  /// Fine when the sphere is farther than `radius` from every point (refine near feature points). Throws
+  /// InvalidInput when radius is negative or not finite, or a point is not finite (naming it).
   static Criterion away_from_points(std::vector<glm::vec3> points, float radius);
   /// Any function of the bound: returns true when fine.
   static Criterion custom(std::function<bool(const ElementBound&)> is_fine);
@@ -113,8 +119,11 @@ struct Query {
   Criterion criterion = Criterion::object_error(0.0f);
   FocusSet focus;                   ///< empty: everywhere
   std::size_t triangle_budget = 0;  ///< 0: no budget
-  double time_budget_ms = 0.0;      ///< 0: no budget
+  double time_budget_ms = 0.0;      ///< 0, negative or NaN: no budget
 
+  /// Throws InvalidInput when the focus set is not valid (FocusSet::validate; the criterion was checked
+  /// when it was made). extract() and update() call it first; O(focus shapes).
+  void validate() const { focus.validate(); }
   bool wants(const ElementBound& b) const { return focus.intersects(b.center, b.radius) && !criterion.is_fine(b); }
 };
 
@@ -159,7 +168,8 @@ concept RefinableFront = requires(F& f, const F& cf, Index e, void (*fn)(Index))
 /// Answers depend only on an element's bound and on the query, so one QueryCoherence serves any front of
 /// ONE structure; call invalidate() before using it with another structure. It falls back to plain
 /// evaluation (and forgets) for queries with a focus set or a triangle budget, or when the criterion
-/// changed otherwise than by its camera. Memory: 16 bytes per element index seen.
+/// changed otherwise than by its camera. Memory: a 16-byte record for every index up to the largest
+/// element index seen, grown by half again each time it grows: up to about 24 x (largest index + 1) bytes.
 class QueryCoherence {
  public:
   /// Forgets every answer (e.g. before serving another structure).
@@ -171,7 +181,11 @@ class QueryCoherence {
   bool begin(const Query& q);
   /// Hint that wants(e, ...) comes soon: starts loading e's record (update() calls it when it queues e).
   void prefetch(Index e) const noexcept {
+#if defined(__GNUC__) || defined(__clang__)
     if (e < records_.size()) __builtin_prefetch(&records_[e]);
+#else
+    (void)e;
+#endif
   }
   /// wants(q) for element e, from memory when its margin allows; bound() gives the element's bound.
   template <class BoundFn>
@@ -360,9 +374,11 @@ void update_unbudgeted(F& front, Wants&& wants, QueryStats& stats, Deadline& dea
 
 }  // namespace detail
 
-/// Refines from the coarsest state (see the file comment). Returns counters.
+/// Refines from the coarsest state (see the file comment). Returns counters. Throws InvalidInput from
+/// q.validate() before touching the front.
 template <RefinableFront F>
 QueryStats extract(F& front, const Query& q) {
+  q.validate();
   front.reset();
   QueryStats stats;
   detail::Deadline deadline(q.time_budget_ms);
@@ -383,9 +399,11 @@ QueryStats extract(F& front, const Query& q) {
 }
 
 
-/// Moves an existing front to the answer of `q` (see the file comment). Returns counters.
+/// Moves an existing front to the answer of `q` (see the file comment). Returns counters. Throws
+/// InvalidInput from q.validate() before touching the front.
 template <RefinableFront F>
 QueryStats update(F& front, const Query& q) {
+  q.validate();
   QueryStats stats;
   detail::Deadline deadline(q.time_budget_ms);
   if (q.triangle_budget == 0) {
@@ -443,6 +461,7 @@ QueryStats update(F& front, const Query& q) {
 /// fewer criterion evaluations when the camera moves a little between calls.
 template <RefinableFront F>
 QueryStats update(F& front, const Query& q, QueryCoherence& coherence) {
+  q.validate();
   if (!coherence.begin(q)) return update(front, q);
   QueryStats stats;
   detail::Deadline deadline(q.time_budget_ms);

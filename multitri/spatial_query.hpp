@@ -48,6 +48,7 @@
 #include <functional>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -296,10 +297,12 @@ std::vector<FaceHit> intersect_region(F& front, const Query& q, const Box3& box,
 /// Answers q, then returns every current face that may meet the frustum (conservative plane test, see
 /// triangle_may_meet_frustum: no face that meets it is missed, a few near its corners may be extra), in
 /// the front's face order; point = centroid, t = 0. Local focus: spheres the frustum's planes do not
-/// exclude (Frustum::intersects_sphere, conservative the same way).
+/// exclude (Frustum::intersects_sphere, conservative the same way). Throws InvalidInput when the frustum
+/// fails Frustum::validate() (a NaN plane would exclude nothing).
 template <SpatialFront F>
 std::vector<FaceHit> intersect_region(F& front, const Query& q, const Frustum& frustum,
                                       const SpatialOptions& options = {}) {
+  frustum.validate();
   detail::answer(front, q, options,
                  [frustum](const ElementBound& b) { return frustum.intersects_sphere(b.center, b.radius); });
   std::vector<FaceHit> out;

@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
@@ -189,6 +192,59 @@ TEST(Camera, PixelsPerUnitMatchTheProjection) {
     const glm::vec4 a = m * glm::vec4(0.0f, d, -0.5f * len, 1.0f), b = m * glm::vec4(0.0f, d, 0.5f * len, 1.0f);
     const float pixels = (b.y / b.w - a.y / a.w) * 0.5f * height;
     EXPECT_NEAR(pixels, len / d * cam.pixels_per_unit_at_distance_one(height), 1e-3f * pixels);
+  }
+}
+
+
+// Cameras that Camera::validate() refuses, each with what is wrong.
+std::vector<std::pair<const char*, Camera>> broken_cameras() {
+  std::vector<std::pair<const char*, Camera>> out;
+  Camera c;
+  c.target = c.eye;
+  out.emplace_back("eye == target", c);
+  c = Camera{};
+  c.eye.x = std::numeric_limits<float>::quiet_NaN();
+  out.emplace_back("NaN eye", c);
+  c = Camera{};
+  c.fov_y_deg = 180.0f;
+  out.emplace_back("fov 180", c);
+  c.fov_y_deg = 270.0f;
+  out.emplace_back("fov 270", c);
+  c = Camera{};
+  c.aspect = 0.0f;
+  out.emplace_back("aspect 0", c);
+  c = Camera{};
+  c.z_near = 10.0f;
+  c.z_far = 1.0f;
+  out.emplace_back("z_near > z_far", c);
+  c = Camera{};
+  c.z_near = 0.0f;
+  out.emplace_back("z_near 0", c);
+  return out;
+}
+
+TEST(Camera, FrustumRefusesAnInvalidCamera) {
+  for (const auto& [what, cam] : broken_cameras()) EXPECT_THROW(cam.frustum(), InvalidInput) << what;
+  EXPECT_NO_THROW(Camera{}.frustum().validate());
+}
+
+TEST(Frustum, ValidateNamesANonFiniteOrZeroPlane) {
+  const Frustum good = Camera{}.frustum();
+  for (std::size_t i = 0; i < 6; ++i) {
+    Frustum f = good;
+    f.planes[i].d = std::numeric_limits<float>::quiet_NaN();
+    try {
+      f.validate();
+      ADD_FAILURE() << "a NaN offset of plane " << i << " was accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(e.element(), i);
+    }
+    f = good;
+    f.planes[i].n = glm::vec3(0.0f);
+    EXPECT_THROW(f.validate(), InvalidInput) << "zero normal, plane " << i;
+    f = good;
+    f.planes[i].n.y = std::numeric_limits<float>::infinity();
+    EXPECT_THROW(f.validate(), InvalidInput) << "infinite normal, plane " << i;
   }
 }
 

@@ -1102,5 +1102,75 @@ TEST(QueryCoherence, UpdateWithCoherenceEqualsExtract) {
   EXPECT_LT(evaluated_coherent, evaluated_plain / 2);
 }
 
+
+TEST(QueryValidation, CriterionFactoriesRefuseBrokenViews) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<Camera> broken(7);
+  broken[0].target = broken[0].eye;
+  broken[1].eye.x = nan;
+  broken[2].fov_y_deg = 180.0f;
+  broken[3].fov_y_deg = 270.0f;
+  broken[4].aspect = 0.0f;
+  broken[5].z_near = 10.0f;
+  broken[5].z_far = 1.0f;
+  broken[6].up = glm::vec3(0.0f);
+  for (std::size_t i = 0; i < broken.size(); ++i)
+    EXPECT_THROW(Criterion::screen_error(broken[i], 1080.0f, 1.0f), InvalidInput) << "camera " << i;
+  EXPECT_THROW(Criterion::screen_error(Camera{}, std::numeric_limits<float>::infinity(), 1.0f), InvalidInput);
+  Frustum nan_plane = Camera{}.frustum();
+  nan_plane.planes[2].n.x = nan;
+  EXPECT_THROW(Criterion::outside_frustum(nan_plane), InvalidInput);
+  EXPECT_THROW(Criterion::back_facing({nan, 0.0f, 0.0f}), InvalidInput);
+  EXPECT_THROW(Criterion::away_from_silhouette({0.0f, std::numeric_limits<float>::infinity(), 0.0f}), InvalidInput);
+  try {
+    Criterion::away_from_points({{0, 0, 0}, {nan, 0, 0}}, 1.0f);
+    ADD_FAILURE() << "a NaN feature point was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.element(), 1u);
+  }
+  EXPECT_THROW(Criterion::away_from_points({}, std::numeric_limits<float>::infinity()), InvalidInput);
+}
+
+TEST(QueryValidation, ABrokenFocusSetIsRefusedBeforeTheFrontMoves) {
+  const GridMt g = make_grid_mt(GridMtOptions{});
+  MtFront front(g.mt);
+  Query fine;
+  fine.criterion = Criterion::object_error(0.1f);
+  extract(front, fine);
+  const std::size_t applied = front.num_applied();
+  ASSERT_GT(applied, 1u);
+
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<FocusSet> broken(6);
+  broken[0].frusta.push_back(Camera{}.frustum());
+  broken[0].frusta.back().planes[4].d = nan;  // as a camera with a NaN field would give
+  Box3 box;
+  box.lo = glm::vec3(nan);
+  box.hi = glm::vec3(nan);
+  broken[1].boxes.push_back(box);
+  broken[2].spheres.push_back({glm::vec3(0.0f), -1.0f});
+  broken[3].spheres.push_back({glm::vec3(nan), 1.0f});
+  broken[4].points.push_back(glm::vec3(0.5f));
+  broken[4].point_radius = -0.5f;
+  broken[5].points.push_back({0.0f, nan, 0.0f});
+  QueryCoherence coherence;
+  for (std::size_t i = 0; i < broken.size(); ++i) {
+    Query q;
+    q.criterion = Criterion::object_error(0.0f);
+    q.focus = broken[i];
+    EXPECT_THROW(q.validate(), InvalidInput) << "focus " << i;
+    EXPECT_THROW(extract(front, q), InvalidInput) << "focus " << i;
+    EXPECT_THROW(update(front, q), InvalidInput) << "focus " << i;
+    EXPECT_THROW(update(front, q, coherence), InvalidInput) << "focus " << i;
+    EXPECT_EQ(front.num_applied(), applied) << "focus " << i;
+  }
+  // An empty box (lo > hi) is a valid focus: it meets nothing, so nothing is refined.
+  Query empty_box;
+  empty_box.criterion = Criterion::object_error(0.0f);
+  empty_box.focus.boxes.push_back(Box3{});
+  extract(front, empty_box);
+  EXPECT_EQ(front.num_applied(), 1u);
+}
+
 }  // namespace
 }  // namespace varmesh

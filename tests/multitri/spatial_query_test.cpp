@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -577,6 +578,23 @@ TEST(SpatialQueryPredicates, SharedEdgeAndVertexAreNeverLost) {
   // The face's plane separates: the triangle cuts the box's bounding slabs but passes beyond a corner.
   EXPECT_FALSE(triangle_overlaps_box({3.1f, 0, 0}, {0, 3.1f, 0}, {0, 0, 3.1f}, box));
   EXPECT_TRUE(triangle_overlaps_box({2.5f, 0, 0}, {0, 2.5f, 0}, {0, 0, 2.5f}, box));
+}
+
+
+TEST(SpatialQuery, IntersectRegionRefusesANonFiniteFrustum) {
+  const HeightField field = make_fractal_terrain(17, 17, 3);
+  const Grid48 grid(field);
+  Grid48Front front(grid);
+  Frustum f = Camera{}.frustum();
+  f.planes[0].d = std::numeric_limits<float>::quiet_NaN();
+  for (const QueryScope scope : {QueryScope::kGlobal, QueryScope::kLocal}) {
+    SpatialOptions o;
+    o.scope = scope;
+    EXPECT_THROW(intersect_region(front, Query{}, f, o), InvalidInput);
+  }
+  SpatialOptions keep;
+  keep.mode = FrontMode::kKeep;
+  EXPECT_THROW(intersect_region(front, Query{}, f, keep), InvalidInput);
 }
 
 }  // namespace
