@@ -48,6 +48,10 @@ TriMesh make_torus(int n, int m, float major_radius, float minor_radius, float b
   if (n < 3 || m < 3 || static_cast<long long>(n) * m > (1LL << 24))
     throw InvalidInput("make_torus: n and m must be at least 3 and n * m at most 2^24, not " + std::to_string(n) + " x " +
                        std::to_string(m));
+  if (!std::isfinite(major_radius) || !(major_radius > 0.0f) || !std::isfinite(minor_radius) ||
+      !(minor_radius > 0.0f) || !std::isfinite(bump))
+    throw InvalidInput("make_torus: the radii must be finite and positive and bump finite, not " +
+                       std::to_string(major_radius) + ", " + std::to_string(minor_radius) + ", " + std::to_string(bump));
   TriMesh g;
   const float two_pi = 2.0f * std::numbers::pi_v<float>;
   g.positions.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(m));
@@ -56,6 +60,10 @@ TriMesh make_torus(int n, int m, float major_radius, float minor_radius, float b
       const float u = two_pi * static_cast<float>(i) / static_cast<float>(n), v = two_pi * static_cast<float>(j) / static_cast<float>(m);
       const float r = minor_radius * (1.0f + bump * std::sin(3.0f * u));
       g.positions.push_back({(major_radius + r * std::cos(v)) * std::cos(u), (major_radius + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+      const glm::vec3& p = g.positions.back();
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw InvalidInput("make_torus: the radii overflow float (vertex " + std::to_string(g.positions.size() - 1) + ")",
+                           g.positions.size() - 1);
     }
   auto id = [&](int i, int j) { return static_cast<Index>(((j + m) % m) * n + (i + n) % n); };
   g.indices.reserve(6 * g.positions.size());

@@ -10,8 +10,8 @@ TriMesh make_icosphere(int levels);
 
 /// Torus around the z axis (genus 1, closed): n x m vertices on a (u, v) grid, each grid quad split by its
 /// (i, j)-(i+1, j+1) diagonal, 2 n m faces, counter-clockwise seen from outside. The tube's radius is
-/// minor_radius * (1 + bump * sin 3u) (bump 0: a plain torus). Throws InvalidInput if n or m is below 3
-/// or n * m exceeds 2^24.
+/// minor_radius * (1 + bump * sin 3u) (bump 0: a plain torus). Throws InvalidInput if n or m is below 3,
+/// n * m exceeds 2^24, a radius is not finite and positive, bump is not finite, or a position overflows.
 TriMesh make_torus(int n, int m, float major_radius = 1.0f, float minor_radius = 0.35f, float bump = 0.0f);
 
 }  // namespace varmesh

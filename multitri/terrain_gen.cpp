@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "multitri/errors.hpp"
 
@@ -38,6 +39,10 @@ HeightField make_fractal_terrain(std::size_t width, std::size_t height, std::uin
   if (width < 2 || height < 2 || width > (1u << 15) || height > (1u << 15))
     throw InvalidInput("make_fractal_terrain: sizes must be in [2, 32768]");
   if (octaves < 1 || octaves > 20) throw InvalidInput("make_fractal_terrain: octaves must be in [1, 20]");
+  if (!std::isfinite(amplitude) || !(amplitude >= 0.0f))
+    throw InvalidInput("make_fractal_terrain: amplitude " + std::to_string(amplitude) + " is not finite and >= 0");
+  if (!std::isfinite(persistence))
+    throw InvalidInput("make_fractal_terrain: persistence " + std::to_string(persistence) + " is not finite");
   HeightField f;
   f.width = width;
   f.height = height;
@@ -59,6 +64,9 @@ HeightField make_fractal_terrain(std::size_t width, std::size_t height, std::uin
       lo = std::min(lo, sum);
       hi = std::max(hi, sum);
     }
+  if (!std::isfinite(lo) || !std::isfinite(hi) || !std::isfinite(hi - lo))
+    throw InvalidInput("make_fractal_terrain: persistence " + std::to_string(persistence) +
+                       " makes the octave sum overflow");
   const float scale = hi > lo ? amplitude / (hi - lo) : 0.0f;
   for (float& v : f.z) v = (v - lo) * scale;
   return f;

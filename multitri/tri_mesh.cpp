@@ -20,6 +20,19 @@ namespace {
 
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+// The index part of validate(): what the helpers below need to stay in bounds.
+void check_indices(const TriMesh& mesh, const char* who) {
+  if (mesh.indices.size() % 3 != 0)
+    throw InvalidInput(std::string(who) + ": index count " + std::to_string(mesh.indices.size()) +
+                       " is not a multiple of 3");
+  const std::size_t n = mesh.positions.size();
+  for (std::size_t i = 0; i < mesh.indices.size(); ++i)
+    if (mesh.indices[i] >= n)
+      throw InvalidInput(std::string(who) + ": face " + std::to_string(i / 3) + " refers to vertex " +
+                             std::to_string(mesh.indices[i]) + " of " + std::to_string(n),
+                         i / 3);
+}
+
 }  // namespace
 
 void TriMesh::validate() const {
@@ -51,6 +64,7 @@ Box3 TriMesh::bounds() const noexcept {
 }
 
 std::vector<glm::vec3> compute_vertex_normals(const TriMesh& mesh) {
+  check_indices(mesh, "compute_vertex_normals");
   std::vector<glm::vec3> n(mesh.positions.size(), glm::vec3(0.0f));
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
     const Index a = mesh.corner(f, 0), b = mesh.corner(f, 1), c = mesh.corner(f, 2);
@@ -68,6 +82,7 @@ std::vector<glm::vec3> compute_vertex_normals(const TriMesh& mesh) {
 }
 
 double surface_area(const TriMesh& mesh) {
+  check_indices(mesh, "surface_area");
   double sum = 0.0;
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
     const glm::dvec3 a(mesh.positions[mesh.corner(f, 0)]);

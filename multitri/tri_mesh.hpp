@@ -13,6 +13,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "multitri/detail/assert.hpp"
 #include "multitri/types.hpp"
 
 namespace varmesh {
@@ -49,7 +50,11 @@ struct TriMesh {
   bool has_texcoords() const noexcept { return !texcoords.empty(); }
   bool has_colors() const noexcept { return !colors.empty(); }
 
-  Index corner(std::size_t face, int k) const noexcept { return indices[3 * face + static_cast<std::size_t>(k)]; }
+  /// Unchecked: 3 * face + k < indices.size(), 0 <= k < 3 (as vector::operator[]).
+  Index corner(std::size_t face, int k) const noexcept {
+    VARMESH_ASSERT(k >= 0 && k < 3 && 3 * face + static_cast<std::size_t>(k) < indices.size());
+    return indices[3 * face + static_cast<std::size_t>(k)];
+  }
 
   /// Throws InvalidInput naming the first element that breaks an invariant above.
   void validate() const;
@@ -57,10 +62,12 @@ struct TriMesh {
   Box3 bounds() const noexcept;
 };
 
-/// Area-weighted vertex normals (unit length; zero for vertices with no non-degenerate face).
+/// Area-weighted vertex normals (unit length; zero for vertices with no non-degenerate face). Throws
+/// InvalidInput when indices.size() is not a multiple of 3 or a face refers to a missing vertex (naming the
+/// face). O(faces + vertices).
 std::vector<glm::vec3> compute_vertex_normals(const TriMesh& mesh);
 
-/// Sum of triangle areas.
+/// Sum of triangle areas. Throws InvalidInput as compute_vertex_normals does. O(faces).
 double surface_area(const TriMesh& mesh);
 
 }  // namespace varmesh

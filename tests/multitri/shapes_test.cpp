@@ -3,6 +3,7 @@
 #include "multitri/shapes.hpp"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <tuple>
 
@@ -11,6 +12,7 @@
 
 #include "multitri/errors.hpp"
 #include "multitri/mesh_report.hpp"
+#include "multitri/terrain_gen.hpp"
 #include "mesh_fixtures.hpp"
 
 namespace varmesh {
@@ -63,6 +65,35 @@ TEST(Shapes, TorusIsAClosedOutwardGenusOneSurface) {
   EXPECT_THROW(make_torus(2, 8), InvalidInput);
   EXPECT_THROW(make_torus(8, 2), InvalidInput);
   EXPECT_THROW(make_torus(1 << 13, 1 << 12), InvalidInput);
+}
+
+
+TEST(Shapes, TorusRefusesRadiiThatAreNotFiniteAndPositive) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const std::tuple<float, float, float> bad[] = {{nan, 0.3f, 0.0f}, {1.0f, inf, 0.0f}, {1.0f, 0.3f, nan},
+                                                 {-1.0f, 0.3f, 0.0f}, {1.0f, 0.0f, 0.0f}, {3e38f, 3e38f, 0.0f}};
+  for (const auto& [big, small, bump] : bad)
+    EXPECT_THROW(make_torus(8, 8, big, small, bump), InvalidInput) << big << " " << small << " " << bump;
+}
+
+TEST(Shapes, FractalTerrainRefusesParametersThatGiveNonFiniteHeights) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, nan), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, inf), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, -1.0f), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, 100.0f, 8, nan), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, 100.0f, 8, inf), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, 100.0f, 20, 1e10f), InvalidInput);  // octave sum overflows
+  EXPECT_THROW(make_fractal_terrain(1, 8, 1), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 32769, 1), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, 100.0f, 0), InvalidInput);
+  EXPECT_THROW(make_fractal_terrain(8, 8, 1, 100.0f, 21), InvalidInput);
+  const HeightField f = make_fractal_terrain(8, 8, 1, 100.0f, 20, -0.9f);
+  f.validate();
+  for (float z : f.z) {
+    EXPECT_GE(z, 0.0f);
+    EXPECT_LE(z, 100.0f);
+  }
 }
 
 }  // namespace

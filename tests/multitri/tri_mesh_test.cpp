@@ -184,5 +184,31 @@ TEST(TriMesh, BoundsOfAMesh) {
   EXPECT_EQ(TriMesh{}.bounds().diagonal(), 0.0f);
 }
 
+
+TEST(TriMesh, HelpersRefuseIndicesOutOfRange) {
+  TriMesh m;
+  m.positions = {{0, 0, 0}};
+  m.indices = {0, 5, 9};
+  for (int which = 0; which < 2; ++which) {
+    try {
+      if (which == 0)
+        (void)surface_area(m);
+      else
+        (void)compute_vertex_normals(m);
+      ADD_FAILURE() << "helper " << which << " accepted a missing vertex";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(e.element(), 0u);
+      EXPECT_NE(std::string(e.what()).find("face 0"), std::string::npos) << e.what();
+    }
+  }
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.indices = {0, 1, 2, 0};
+  EXPECT_THROW((void)surface_area(m), InvalidInput);
+  EXPECT_THROW((void)compute_vertex_normals(m), InvalidInput);
+  m.indices.pop_back();
+  EXPECT_DOUBLE_EQ(surface_area(m), 0.5);
+  EXPECT_EQ(compute_vertex_normals(m)[0], glm::vec3(0, 0, 1));
+}
+
 }  // namespace
 }  // namespace varmesh
