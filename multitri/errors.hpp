@@ -5,7 +5,18 @@
 /// - IoError: a file could not be read or written, or its content is malformed. Carries the file name and,
 ///   when known, the 1-based line number (text formats) or the byte offset (binary formats).
 /// - InvalidInput: arrays or parameters handed to a public function break its contract. Carries the index
-///   of the offending element when there is one.
+///   of the offending element when there is one. In multitri this includes the validate() self-checks
+///   (Mt::validate, MtFront::validate, TriMesh::validate, ...), which name the element that breaks an
+///   invariant.
+/// - std::logic_error (other than InvalidInput, which derives from it through std::invalid_argument): an
+///   internal invariant of the library is broken, i.e. a bug, not bad input. Some validate() functions
+///   and internal guards of the other modules report this way (pm's VertexHierarchy::validate, fourk's
+///   refinement guards); their headers say so.
+/// - std::bad_alloc when memory runs out.
+///
+/// Unchecked accessors (noexcept, O(1), taking an element id, as std::vector::operator[] takes an index)
+/// state their precondition in their comment instead of throwing; VARMESH_ASSERT (detail/assert.hpp)
+/// checks it in debug and sanitizer builds.
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
