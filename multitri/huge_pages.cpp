@@ -22,6 +22,18 @@
 
 namespace varmesh {
 
+namespace {
+// Clang 14 declares the sized operator delete only with -fsized-deallocation; the unsized one frees the
+// same block.
+void delete_block(void* p, [[maybe_unused]] std::size_t bytes) noexcept {
+#if defined(__cpp_sized_deallocation)
+  ::operator delete(p, bytes);
+#else
+  ::operator delete(p);
+#endif
+}
+}  // namespace
+
 #if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(VARMESH_NO_HUGE_PAGES)
 namespace {
 constexpr std::size_t kHuge = std::size_t{2} << 20;
@@ -49,11 +61,11 @@ void huge_deallocate(void* p, std::size_t bytes) noexcept {
     munmap(p, bytes);
     return;
   }
-  ::operator delete(p, bytes);
+  delete_block(p, bytes);
 }
 #else
 void* huge_allocate(std::size_t bytes) { return ::operator new(bytes); }
-void huge_deallocate(void* p, std::size_t bytes) noexcept { ::operator delete(p, bytes); }
+void huge_deallocate(void* p, std::size_t bytes) noexcept { delete_block(p, bytes); }
 #endif
 
 double physical_memory_bytes() noexcept {
