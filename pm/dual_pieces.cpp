@@ -29,6 +29,16 @@ std::vector<Index> active_ancestors(const VertexHierarchy& h, std::span<const st
 }
 
 std::vector<DualPieceFace> dual_piece_mesh(const VertexHierarchy& h, std::span<const Index> leaf_ancestor) {
+  if (leaf_ancestor.size() != h.num_leaves())
+    throw InvalidInput("dual_piece_mesh: " + std::to_string(leaf_ancestor.size()) + " ancestors for " +
+                       std::to_string(h.num_leaves()) + " leaves");
+  for (std::size_t l = 0; l < leaf_ancestor.size(); ++l) {
+    const Index a = leaf_ancestor[l];
+    // The section 4.3 keys answer "ancestor of l?" in O(1).
+    if (a >= h.num_nodes() || !h.is_ancestor_or_self(a, static_cast<Index>(l)))
+      throw InvalidInput("dual_piece_mesh: leaf " + std::to_string(l) + ": " + std::to_string(a) +
+                         " is not the leaf or one of its ancestors");
+  }
   std::vector<DualPieceFace> out;
   for (std::size_t f = 0; f < h.num_faces(); ++f) {
     const auto c = h.face(static_cast<Index>(f));

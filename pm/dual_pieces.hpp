@@ -7,6 +7,7 @@
 /// vertices are the active nodes and its faces are the original faces whose three corners have three
 /// distinct active ancestors, relabelled by those ancestors.
 #include <array>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -23,6 +24,9 @@ struct DualPieceFace {
   Index original = kInvalid;
   std::array<Index, 3> corners{};
 };
+/// The faces, in increasing original face id, given each leaf's active ancestor (as active_ancestors()
+/// returns: leaf_ancestor[l] is l or an ancestor of l). Throws InvalidInput when leaf_ancestor does not
+/// have one entry per leaf or an entry is not an ancestor of its leaf (naming the leaf). O(leaves + faces).
 std::vector<DualPieceFace> dual_piece_mesh(const VertexHierarchy& h, std::span<const Index> leaf_ancestor);
 
 }  // namespace varmesh

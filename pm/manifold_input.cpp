@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <numeric>
+#include <string>
 
 #include "multitri/errors.hpp"
 
@@ -27,6 +28,9 @@ struct UnionFind {
 }  // namespace
 
 ManifoldInput make_manifold_input(const TriMesh& mesh, NonManifoldPolicy policy) {
+  if (policy != NonManifoldPolicy::kSplit && policy != NonManifoldPolicy::kLock)
+    throw InvalidInput("make_manifold_input: non-manifold policy " + std::to_string(static_cast<int>(policy)) +
+                       " is not one of kSplit, kLock");
   mesh.validate();
   ManifoldInput out;
   InputRepairReport& rep = out.report;

@@ -38,8 +38,9 @@ struct ManifoldInput {
   InputRepairReport report;
 };
 
-/// Applies steps 1-5 above. Throws InvalidInput when mesh.validate() fails (naming the element) or when no
-/// face is left (naming the file-independent reason: "no non-degenerate face"). O(faces log faces).
+/// Applies steps 1-5 above. Throws InvalidInput when `policy` is not one of the enumeration's values, when
+/// mesh.validate() fails (naming the element) or when no face is left (naming the file-independent reason:
+/// "no non-degenerate face"). O(faces log faces).
 ManifoldInput make_manifold_input(const TriMesh& mesh, NonManifoldPolicy policy = NonManifoldPolicy::kSplit);
 
 }  // namespace varmesh

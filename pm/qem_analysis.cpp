@@ -1311,6 +1311,12 @@ VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& op
   if (!(options.lt_finish == 0.0 || (options.lt_finish > 1.0 && std::isfinite(options.lt_finish))))
     throw InvalidInput("QemOptions::lt_finish must be 0 or a finite number > 1");
   if (options.max_depth < 1 || options.max_depth > 62) throw InvalidInput("QemOptions::max_depth must be in [1, 62]");
+  if (options.cost != CollapseCost::kQuadric && options.cost != CollapseCost::kLindstromTurk)
+    throw InvalidInput("QemOptions::cost must be CollapseCost::kQuadric or kLindstromTurk, not " +
+                       std::to_string(static_cast<int>(options.cost)));
+  if (options.non_manifold != NonManifoldPolicy::kSplit && options.non_manifold != NonManifoldPolicy::kLock)
+    throw InvalidInput("QemOptions::non_manifold must be NonManifoldPolicy::kSplit or kLock, not " +
+                       std::to_string(static_cast<int>(options.non_manifold)));
   mesh.validate();
   ManifoldInput in;
   if (!clean_manifold_input(mesh, in)) in = make_manifold_input(mesh, options.non_manifold);
@@ -1321,7 +1327,9 @@ VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& op
 }
 
 TriMesh mesh_after_collapses(const VertexHierarchy& h, std::size_t collapses) {
-  collapses = std::min(collapses, h.num_collapses());
+  if (collapses > h.num_collapses())
+    throw InvalidInput("mesh_after_collapses: " + std::to_string(collapses) + " collapses asked, the hierarchy has " +
+                       std::to_string(h.num_collapses()));
   const std::size_t nl = h.num_leaves();
   const std::size_t nn = nl + collapses;
   // Ancestor among nodes < nn: walk parents while the parent exists within the prefix.

@@ -99,7 +99,8 @@ struct QemOptions {
   NonManifoldPolicy non_manifold = NonManifoldPolicy::kSplit;
   /// Deepest tree allowed (node ids need depth + 1 bits; the tree ids take the rest of the 64 bits).
   int max_depth = 44;
-  /// Called every 4096 collapses with (collapses done, vertices left); may be empty.
+  /// Called every 4096 collapses with (collapses done, vertices left); may be empty. What it throws ends the
+  /// analysis and propagates.
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
@@ -116,12 +117,14 @@ struct QemStats {
 };
 
 /// Builds the hierarchy of `mesh` (repaired as manifold_input.hpp says). Throws InvalidInput on invalid
-/// input (naming the element) or options (naming the option). O(n log n) for n faces.
+/// input (naming the element) or options (naming the option: a value out of its range, an enumeration
+/// member that does not exist). O(n log n) for n faces.
 VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& options = {}, QemStats* stats = nullptr);
 
 /// The mesh M^i after the first `collapses` collapses of the hierarchy (the plain PM order): vertices are
-/// node positions indexed by node id (all nodes; unused ones are simply unreferenced), faces the original
-/// faces that survive, relabelled. O(nodes + faces).
+/// node positions indexed by node id (the leaves and the nodes the collapses made; unused ones are simply
+/// unreferenced), faces the original faces that survive, relabelled. collapses = h.num_collapses() gives
+/// the base mesh. Throws InvalidInput when collapses > h.num_collapses(). O(nodes + faces).
 TriMesh mesh_after_collapses(const VertexHierarchy& h, std::size_t collapses);
 
 }  // namespace varmesh

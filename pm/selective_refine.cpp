@@ -16,6 +16,7 @@ namespace varmesh {
 SelectiveRefineResult refine_to_predicate(SrMesh& mesh, const std::function<bool(Index)>& needs_refinement,
                                           std::size_t max_rounds) {
   if (max_rounds == 0) throw InvalidInput("refine_to_predicate: max_rounds must be >= 1");
+  if (!needs_refinement) throw InvalidInput("refine_to_predicate: needs_refinement is an empty std::function");
   const VertexHierarchy& h = mesh.hierarchy();
   const Index first_inner = static_cast<Index>(h.num_leaves());
   const Index num_nodes = static_cast<Index>(h.num_nodes());

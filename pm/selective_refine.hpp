@@ -42,7 +42,8 @@ struct SelectiveRefineResult {
 /// a progressive mesh would), pushing split nodes' children; rounds repeat while a scheme's forced
 /// operations leave needy active nodes behind (a forced Xia-Varshney collapse can), at most `max_rounds`
 /// times. Requires needs_refinement to be callable on any node id. Time O(rounds * nodes + operations * k)
-/// for k-vertex 1-rings. Throws InvalidInput when max_rounds is 0; propagates what SrMesh throws.
+/// for k-vertex 1-rings. Throws InvalidInput when max_rounds is 0 or needs_refinement is empty; propagates
+/// what SrMesh throws and what needs_refinement throws.
 SelectiveRefineResult refine_to_predicate(SrMesh& mesh, const std::function<bool(Index)>& needs_refinement,
                                           std::size_t max_rounds = 64);
 

@@ -566,6 +566,31 @@ TEST(QemAnalysis, RejectsBadOptions) {
   EXPECT_THROW(build_vertex_hierarchy(bad), InvalidInput);
   TriMesh empty;
   EXPECT_THROW(build_vertex_hierarchy(empty), InvalidInput);
+  // Enumeration values that name no member (a cast, a bad config file) are refused, on a clean mesh (which
+  // skips make_manifold_input) and on one that needs repair alike.
+  TriMesh pinched = make_icosphere(1);
+  pinched.indices.insert(pinched.indices.end(), {pinched.indices[0], pinched.indices[1], pinched.indices[2]});
+  for (const TriMesh* mesh : std::initializer_list<const TriMesh*>{&m, &pinched}) {
+    o = {};
+    o.cost = static_cast<CollapseCost>(7);
+    EXPECT_THROW(build_vertex_hierarchy(*mesh, o), InvalidInput);
+    o = {};
+    o.non_manifold = static_cast<NonManifoldPolicy>(9);
+    EXPECT_THROW(build_vertex_hierarchy(*mesh, o), InvalidInput);
+  }
+  EXPECT_THROW(make_manifold_input(pinched, static_cast<NonManifoldPolicy>(2)), InvalidInput);
+  EXPECT_NO_THROW(make_manifold_input(pinched, NonManifoldPolicy::kLock));
+}
+
+// mesh_after_collapses takes 0 .. num_collapses() collapses (the leaves .. the base mesh) and refuses more
+// rather than quietly returning the base mesh.
+TEST(QemAnalysis, MeshAfterCollapsesRefusesMoreThanTheHierarchyHas) {
+  const VertexHierarchy h = build_vertex_hierarchy(make_torus(12, 8));
+  EXPECT_EQ(mesh_after_collapses(h, 0).num_faces(), h.num_faces());
+  EXPECT_EQ(mesh_after_collapses(h, h.num_collapses()).num_faces(), h.base_faces().size());
+  EXPECT_THROW(mesh_after_collapses(h, h.num_collapses() + 1), InvalidInput);
+  EXPECT_THROW(mesh_after_collapses(h, std::size_t{1} << 30), InvalidInput);
+  EXPECT_THROW(mesh_after_collapses(VertexHierarchy{}, 1), InvalidInput);
 }
 
 bool same_records(const VertexHierarchy& x, const VertexHierarchy& y, std::size_t collapses) {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <set>
 #include <string>
 
@@ -224,6 +225,10 @@ TEST(SelectiveRefine, TrivialPredicates) {
     EXPECT_EQ(all.num_faces(), h.num_faces());
     EXPECT_NO_THROW(all.validate());
     EXPECT_THROW(refine_to_predicate(all, [](Index) { return true; }, 0), InvalidInput);
+    // An empty std::function is a bad argument like the others (it used to escape as bad_function_call).
+    SrMesh some(h, s);
+    EXPECT_THROW(refine_to_predicate(some, std::function<bool(Index)>{}), InvalidInput);
+    EXPECT_EQ(some.num_active_vertices(), h.num_roots());
   }
 }
 
