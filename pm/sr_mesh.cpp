@@ -29,10 +29,9 @@ const char* scheme_name(RefinementScheme s) noexcept {
 
 namespace {
 constexpr int kXvMaxDepth = 200;
-// Rings longer than this look for cut vertices by walking up from the leaf and for common neighbours with
-// stamps; shorter ones (nearly all: valence ~6) compare in registers and test the section 4.3 keys.
+// Rings longer than this look for cut vertices by walking up from the leaf and for common neighbours in a
+// sorted copy; shorter ones (nearly all: valence ~6) compare in registers and test the section 4.3 keys.
 constexpr std::size_t kLongRing = 32;
-constexpr std::size_t kRingStart = 64;
 // Look-ahead of refine_all/coarsen_all: stages and operations between stages. The last stage walks
 // kLookStages - 1 faces each way around a vertex, so 5 stages cover a whole fan of valence up to 8 or 9;
 // on the dragon (AMD EPYC guest) 5 x 3 did vsplit/ecol in 143-175 / 172-203 ns against 195-231 /
@@ -40,16 +39,62 @@ constexpr std::size_t kRingStart = 64;
 constexpr int kLookStages = 5;
 constexpr int kLookGap = 3;
 
+// What a moved-from SrMesh refers to. Building it allocates nothing (all its arrays are empty), so the
+// noexcept moves may reach it.
+const VertexHierarchy& empty_hierarchy() noexcept {
+  static const VertexHierarchy empty;
+  return empty;
+}
+
 }  // namespace
 
+SrMesh::SrMesh(SrMesh&& other) noexcept : h_(&empty_hierarchy()) { swap(other); }
+
+SrMesh& SrMesh::operator=(SrMesh&& other) noexcept {
+  if (this != &other) {
+    SrMesh taken(std::move(other));
+    swap(taken);
+  }
+  return *this;
+}
+
+void SrMesh::swap(SrMesh& o) noexcept {
+  // The rings are scratch, filled again by every operation: not exchanged, and what they held forgotten.
+  ecn_.vs = o.ecn_.vs = kInvalid;
+  using std::swap;
+  swap(h_, o.h_);
+  swap(scheme_, o.scheme_);
+  swap(num_slots_, o.num_slots_);
+  swap(faces_, o.faces_);
+  swap(slot_of_, o.slot_of_);
+  swap(face_of_, o.face_of_);
+  swap(splits_, o.splits_);
+  swap(nodes_, o.nodes_);
+  swap(base_slots_, o.base_slots_);
+  swap(base_corners_, o.base_corners_);
+  swap(active_list_, o.active_list_);
+  swap(collapsible_, o.collapsible_);
+  swap(track_collapsible_, o.track_collapsible_);
+  swap(num_active_, o.num_active_);
+  swap(num_faces_, o.num_faces_);
+  swap(stats_, o.stats_);
+  swap(in_progress_, o.in_progress_);
+  swap(sink_, o.sink_);
+  swap(sink_ctx_, o.sink_ctx_);
+}
+
 SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), scheme_(scheme) {
+  if (scheme != RefinementScheme::kKimLee && scheme != RefinementScheme::kHoppe97 &&
+      scheme != RefinementScheme::kXiaVarshney)
+    throw InvalidInput("SrMesh: refinement scheme " + std::to_string(static_cast<int>(scheme)) +
+                       " is not one of kKimLee, kHoppe97, kXiaVarshney");
   // Half-edge ids are 4 * face + corner in 32 bits.
   if (h.num_faces() >= (std::size_t{1} << 30))
     throw InvalidInput("SrMesh: " + std::to_string(h.num_faces()) + " faces exceed the 2^30 - 1 supported");
   num_slots_ = static_cast<Index>(h.num_faces());
   faces_.assign(num_slots_, {});
   nodes_.assign(h.num_nodes(), {});
-  // mark_ (long rings only) is sized on first use; in_progress_ serves the Xia-Varshney rule only.
+  // in_progress_ serves the Xia-Varshney rule only.
   if (scheme == RefinementScheme::kXiaVarshney) in_progress_.assign(h.num_nodes(), 0);
   // Slots in vsplit order (see faces_); every face is a base face or created by exactly one collapse.
   slot_of_.assign(num_slots_, kInvalid);
@@ -91,8 +136,6 @@ SrMesh::SrMesh(const VertexHierarchy& h, RefinementScheme scheme) : h_(&h), sche
   // are collapsible at once: reserved, the list never reallocates (nor throws) inside vsplit, ecol or the
   // rebuild at the end of refine_all/coarsen_all.
   collapsible_.reserve(h.num_leaves() / 2 + 1);
-  for (Ring* ring : {&ring_, &ring2_, &ring3_}) ring->buf.resize(2 * kRingStart);
-  nbrs_.reserve(kLongRing + 1);
   build_base();
   reset();
 }
@@ -131,7 +174,7 @@ void SrMesh::build_base() {
 
 void SrMesh::reset() {
   // Back to the base mesh saved by build_base().
-  ecn_for_ = kInvalid;
+  ecn_.vs = kInvalid;
   std::fill(nodes_.begin(), nodes_.end(), NodeSlot{});
   active_list_.clear();
   collapsible_.clear();
@@ -156,7 +199,9 @@ void SrMesh::check_node(Index v, const char* what) const {
 // (four when two rings are walked together). An open fan ends with both walks on the border, which leaves
 // it in order from its clockwise end.
 void SrMesh::ring_begin(Index start, Ring& ring) const {
-  ring.lo = ring.buf.size() / 2;
+  static_assert(next_corner(0) == 1 && next_corner(1) == 2 && next_corner(2) == 0);
+  static_assert(prev_corner(0) == 2 && prev_corner(1) == 0 && prev_corner(2) == 1);
+  ring.lo = ring.cap / 2;
   ring.hi = ring.lo + 1;
   ring.buf[ring.lo] = ring.fwd = ring.back = start;
   ring.fwd_open = ring.back_open = true;
@@ -164,7 +209,7 @@ void SrMesh::ring_begin(Index start, Ring& ring) const {
 }
 
 inline bool SrMesh::ring_step(Ring& ring) const {
-  Index* buf = ring.buf.data();
+  Index* buf = ring.buf;
   if (ring.fwd_open) {
     // Across the edge entering the centre: the twin half-edge leaves the centre.
     const Index n = faces_[ring.fwd >> 2].twin[prev_corner(ring.fwd & 3)];
@@ -187,15 +232,17 @@ inline bool SrMesh::ring_step(Ring& ring) const {
     }
   }
   if (!ring.fwd_open && !ring.back_open) return true;
-  if (ring.lo == 0 || ring.hi == ring.buf.size()) {
+  if (ring.lo == 0 || ring.hi == ring.cap) {
     if (ring.size() > 3 * static_cast<std::size_t>(num_slots_))
       throw std::logic_error("SrMesh: the fan of node " + std::to_string(corner_node(ring.fwd)) + " does not end");
-    std::vector<Index> grown(2 * ring.buf.size());
-    const std::size_t lo = ring.buf.size() - ring.size() / 2;
+    std::vector<Index> grown(2 * ring.cap);
+    const std::size_t lo = ring.cap - ring.size() / 2;
     std::copy(buf + ring.lo, buf + ring.hi, grown.data() + lo);
     ring.hi = lo + ring.size();
     ring.lo = lo;
-    ring.buf.swap(grown);
+    ring.big.swap(grown);
+    ring.buf = ring.big.data();
+    ring.cap = ring.big.size();
   }
   return false;
 }
@@ -224,11 +271,11 @@ Index SrMesh::active_ancestor(Index leaf) const noexcept {
 
 void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
   // ring_ holds the 1-ring of vs, pl/pr the places of vl/vr among its neighbours (-1 when absent).
-  ecn_for_ = kInvalid;
+  ecn_.vs = kInvalid;
   const Split& r = split_of(vs);
   const Ring& ring = ring_;
   const int m = static_cast<int>(ring.size());
-  const Index* hs = ring.buf.data() + ring.lo;
+  const Index* hs = ring.buf + ring.lo;
   auto assign = [&](int from, int to, Index v) {
     for (int j = from; j < to; ++j) faces_[hs[j] >> 2].v[hs[j] & 3] = v;
   };
@@ -307,8 +354,8 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
 }
 
 void SrMesh::do_ecol(Index vs) {
-  // ring_ and ring2_ hold the 1-rings of vt and vu (left there by extra_common_neighbors).
-  ecn_for_ = kInvalid;
+  // ring_ and ring2_ hold the 1-rings of vt and vu (left there by extra_common_neighbors_kept).
+  ecn_.vs = kInvalid;
   const Split& r = split_of(vs);
   for (Index v : {vs, r.vt, r.vu}) prefetch_line(&nodes_[v]);
   prefetch_line(&nodes_[active_list_.back()]);
@@ -357,18 +404,9 @@ void SrMesh::do_ecol(Index vs) {
   ++stats_.ecols;
 }
 
-bool SrMesh::extra_common_neighbors(Index vs) const {
-  // Section 4.4: do vt and vu share a neighbour besides the cut vertices? The rings start at fl (or fr),
-  // whose corners 0 and 1 are vt and vu (fr's the other way round), which spares two vertex lookups.
-  // The answer and the rings are kept until the mesh or ring_ changes: update() asks is_coarsenable(e)
-  // and then coarsen_one(e), which need the same walk.
-  if (ecn_for_ == vs) return ecn_result_;
-  ecn_for_ = vs;
-  ecn_result_ = extra_common_neighbors_walk(vs);
-  return ecn_result_;
-}
-
-bool SrMesh::extra_common_neighbors_walk(Index vs) const {
+bool SrMesh::extra_common_neighbors(Index vs, Ring& rt, Ring& ru) const {
+  // The rings start at fl (or fr), whose corners 0 and 1 are vt and vu (fr's the other way round), which
+  // spares two vertex lookups.
   const Split& r = split_of(vs);
   if (r.fl != kInvalid) prefetch_line(&faces_[r.fl]);
   if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
@@ -376,24 +414,33 @@ bool SrMesh::extra_common_neighbors_walk(Index vs) const {
   const Index vr = r.fr != kInvalid ? faces_[r.fr].v[2] : kInvalid;
   const Index f = r.fl != kInvalid ? r.fl : r.fr;
   const bool fl_side = r.fl != kInvalid;
-  gather_rings(he(f, fl_side ? 0 : 1), ring_, he(f, fl_side ? 1 : 0), ring2_);
-  const std::size_t nt = ring_.size() + (ring_.closed ? 0 : 1), nu = ring2_.size() + (ring2_.closed ? 0 : 1);
+  gather_rings(he(f, fl_side ? 0 : 1), rt, he(f, fl_side ? 1 : 0), ru);
+  const std::size_t nt = rt.size() + (rt.closed ? 0 : 1), nu = ru.size() + (ru.closed ? 0 : 1);
   auto candidate = [&](Index n) { return n != vl && n != vr && n != r.vt; };
   if (nt <= kLongRing && nu <= kLongRing) {
-    nbrs_.clear();
-    for (std::size_t i = 0; i < nt; ++i) nbrs_.push_back(ring_neighbor(ring_, i));
+    std::array<Index, kLongRing> nbrs;  // written before read
+    for (std::size_t i = 0; i < nt; ++i) nbrs[i] = ring_neighbor(rt, i);
+    const auto end = nbrs.begin() + static_cast<std::ptrdiff_t>(nt);
     for (std::size_t i = 0; i < nu; ++i) {
-      const Index n = ring_neighbor(ring2_, i);
-      if (candidate(n) && std::find(nbrs_.begin(), nbrs_.end(), n) != nbrs_.end()) return true;
+      const Index n = ring_neighbor(ru, i);
+      if (candidate(n) && std::find(nbrs.begin(), end, n) != end) return true;
     }
     return false;
   }
-  if (mark_.empty()) mark_.assign(h_->num_nodes(), 0);
-  ++stamp_;
-  for (std::size_t i = 0; i < nt; ++i) mark_[ring_neighbor(ring_, i)] = stamp_;
+  return long_rings_share(rt, nt, ru, nu, {vl, vr, r.vt});
+}
+
+bool SrMesh::long_rings_share(const Ring& rt, std::size_t nt, const Ring& ru, std::size_t nu,
+                              const std::array<Index, 3>& except) const {
+  // A long ring (the coarse side of an adaptive mesh, rare): vt's neighbours sorted, vu's looked up. Apart
+  // from the short rings' loop, which it would otherwise crowd.
+  std::vector<Index> nbrs(nt);
+  for (std::size_t i = 0; i < nt; ++i) nbrs[i] = ring_neighbor(rt, i);
+  std::sort(nbrs.begin(), nbrs.end());
   for (std::size_t i = 0; i < nu; ++i) {
-    const Index n = ring_neighbor(ring2_, i);
-    if (candidate(n) && mark_[n] == stamp_) return true;
+    const Index n = ring_neighbor(ru, i);
+    if (n != except[0] && n != except[1] && n != except[2] && std::binary_search(nbrs.begin(), nbrs.end(), n))
+      return true;
   }
   return false;
 }
@@ -411,15 +458,30 @@ bool SrMesh::xv_ring_matches(Index vs) const {
   return true;
 }
 
-bool SrMesh::can_ecol(Index vs) const {
-  if (vs >= h_->num_nodes() || h_->is_leaf(vs) || !collapsible(vs)) return false;
-  switch (scheme_) {
-    case RefinementScheme::kKimLee: return !extra_common_neighbors(vs);
-    case RefinementScheme::kHoppe97: return hoppe_ecol_legal(vs) && !extra_common_neighbors(vs);
-    case RefinementScheme::kXiaVarshney: return xv_ring_matches(vs) && !extra_common_neighbors(vs);
-  }
-  return false;
+// update() asks is_coarsenable(e) and then coarsen_one(e), which need the same walk: the non-const members
+// keep its rings and answer in ring_/ring2_ and ecn_ until the mesh or ring_ changes. The const ones (which
+// several threads may call at once) keep nothing and walk rings of their own.
+bool SrMesh::extra_common_neighbors_kept(Index vs) {
+  if (ecn_.vs == vs) return ecn_.result;
+  ecn_.result = extra_common_neighbors(vs, ring_, ring2_);
+  ecn_.vs = vs;
+  return ecn_.result;
 }
+
+inline bool SrMesh::ecol_rule_allows(Index vs) const {
+  if (vs >= h_->num_nodes() || h_->is_leaf(vs) || !collapsible(vs)) return false;
+  if (scheme_ == RefinementScheme::kHoppe97 && !hoppe_ecol_legal(vs)) return false;
+  if (scheme_ == RefinementScheme::kXiaVarshney && !xv_ring_matches(vs)) return false;
+  return true;
+}
+
+bool SrMesh::can_ecol(Index vs) const {
+  if (!ecol_rule_allows(vs)) return false;
+  Ring rt, ru;  // this call's own
+  return !extra_common_neighbors(vs, rt, ru);
+}
+
+bool SrMesh::is_coarsenable(Index e) { return ecol_rule_allows(e) && !extra_common_neighbors_kept(e); }
 
 bool SrMesh::vsplit_kim_lee(Index vs) {
   const Split& r = split_of(vs);
@@ -447,7 +509,7 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
   if (r.fl != kInvalid) prefetch_line(&faces_[r.fl]);
   if (r.fr != kInvalid) prefetch_line(&faces_[r.fr]);
   for (;;) {
-    ecn_for_ = kInvalid;  // ring_ is overwritten
+    ecn_.vs = kInvalid;  // ring_ is overwritten
     gather_ring(nodes_[vs].corner, ring_);
     const std::size_t nn = ring_.size() + (ring_.closed ? 0 : 1);
     Index vl = kInvalid, vr = kInvalid;
@@ -579,7 +641,7 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
         ok = false;
         break;
       }
-  ok = ok && collapsible(vs) && xv_ring_matches(vs) && !extra_common_neighbors(vs);
+  ok = ok && collapsible(vs) && xv_ring_matches(vs) && !extra_common_neighbors_kept(vs);
   if (ok) do_ecol(vs);
   in_progress_[vs] = 0;
   return ok;
@@ -606,7 +668,7 @@ bool SrMesh::ecol(Index vs) {
     throw InvalidInput("ecol: the children of node " + std::to_string(vs) + " are not both active");
   switch (scheme_) {
     case RefinementScheme::kKimLee:
-      if (extra_common_neighbors(vs)) {
+      if (extra_common_neighbors_kept(vs)) {
         ++stats_.degenerate_cases;  // section 4.4: postponed
         ++stats_.postponed_ecols;
         ++stats_.refused_ecols;
@@ -615,7 +677,7 @@ bool SrMesh::ecol(Index vs) {
       do_ecol(vs);
       return true;
     case RefinementScheme::kHoppe97:
-      if (!hoppe_ecol_legal(vs) || extra_common_neighbors(vs)) {
+      if (!hoppe_ecol_legal(vs) || extra_common_neighbors_kept(vs)) {
         ++stats_.refused_ecols;
         return false;
       }
@@ -818,7 +880,6 @@ void SrMesh::validate() const {
   }
   if (faces != num_faces_) fail("face count");
   Ring ring;
-  ring.buf.resize(2 * kRingStart);
   for (std::size_t v = 0; v < nodes_.size(); ++v) {
     const Index p = h_->parent(static_cast<Index>(v));
     if (node_active(v)) {
@@ -857,7 +918,8 @@ void SrMesh::validate() const {
 std::size_t SrMesh::memory_bytes() const noexcept {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(SrMesh) + bytes(faces_) + bytes(slot_of_) + bytes(face_of_) + bytes(splits_) + bytes(nodes_) +
-         bytes(base_slots_) + bytes(base_corners_) + bytes(active_list_) + bytes(collapsible_) + bytes(list_buf_) + bytes(nbrs_) + bytes(mark_) + bytes(in_progress_);
+         bytes(base_slots_) + bytes(base_corners_) + bytes(active_list_) + bytes(collapsible_) + bytes(list_buf_) + bytes(in_progress_) +
+         (ring_.big.capacity() + ring2_.big.capacity() + ring3_.big.capacity()) * sizeof(Index);
 }
 
 }  // namespace varmesh

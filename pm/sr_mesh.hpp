@@ -41,22 +41,39 @@
 /// opposite directed edges; every active vertex has one fan of faces (disc or half-disc); node states are
 /// consistent (an active node's ancestors are refined, its descendants inactive). The dual-piece oracle
 /// (dual_pieces.hpp) checks independently that the faces are those the active set defines.
+///
+/// Threads: const members only read (they keep no scratch in the object), so any number of threads may call
+/// them on one SrMesh while no thread changes it. Non-const members need the mesh to themselves. Meshes
+/// over one hierarchy are independent.
+///
+/// Errors: InvalidInput for bad arguments, as each member says. std::logic_error only on a broken internal
+/// invariant: a bug, or a hierarchy that does not pass VertexHierarchy::validate() (one assembled with
+/// VertexHierarchyBuilder::finish(raw, false)). The accessors documented "unchecked" take ids as
+/// std::vector::operator[] takes an index: out of range is undefined (VARMESH_ASSERT checks it in debug and
+/// sanitizer builds).
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#include <glm/vec3.hpp>
+
 #include "multitri/bounds.hpp"
+#include "multitri/detail/assert.hpp"
 #include "multitri/huge_pages.hpp"
 #include "multitri/tri_mesh.hpp"
+#include "multitri/types.hpp"
 #include "pm/vertex_hierarchy.hpp"
 
 namespace varmesh {
 
 enum class RefinementScheme : std::uint8_t { kKimLee, kHoppe97, kXiaVarshney };
 
+/// "kim-lee", "hoppe97" or "xia-varshney"; "?" for a value outside the enumeration.
 const char* scheme_name(RefinementScheme s) noexcept;
 
 struct SrStats {
@@ -72,25 +89,54 @@ struct SrStats {
   std::size_t failed_vsplits = 0;   ///< vsplits abandoned on a dependency cycle (Xia-Varshney only)
 };
 
+/// The selectively refined mesh of one VertexHierarchy (see the file comment). It refers to the hierarchy,
+/// which must outlive it; copies refer to the same hierarchy. A moved-from SrMesh is an empty mesh over an
+/// empty hierarchy (no node, no face): its members work on that, and vsplit/ecol throw InvalidInput.
 class SrMesh {
  public:
-  /// Starts at the base mesh. The hierarchy must outlive the mesh.
+  /// Starts at the base mesh. The hierarchy must outlive the mesh. Throws InvalidInput when `scheme` is not
+  /// one of the enumeration's values or the hierarchy has 2^30 faces or more. O(nodes + faces).
   explicit SrMesh(const VertexHierarchy& h, RefinementScheme scheme = RefinementScheme::kKimLee);
+  /// Deleted: the mesh keeps a reference to its hierarchy, which a temporary would not outlive.
+  explicit SrMesh(const VertexHierarchy&& h, RefinementScheme scheme = RefinementScheme::kKimLee) = delete;
+  SrMesh(const SrMesh&) = default;
+  SrMesh& operator=(const SrMesh&) = default;
+  /// Leaves `other` empty (see the class comment).
+  SrMesh(SrMesh&& other) noexcept;
+  SrMesh& operator=(SrMesh&& other) noexcept;
+  ~SrMesh() = default;
 
   const VertexHierarchy& hierarchy() const noexcept { return *h_; }
   RefinementScheme scheme() const noexcept { return scheme_; }
 
   enum class State : std::uint8_t { kBelow = 0, kActive = 1, kRefined = 2 };
+  /// Unchecked: v < hierarchy().num_nodes().
   State state(Index v) const noexcept {
+    VARMESH_ASSERT(v < nodes_.size());
     return node_active(v) ? State::kActive : node_refined(v) ? State::kRefined : State::kBelow;
   }
-  bool is_active(Index v) const noexcept { return node_active(v); }
+  /// Unchecked: v < hierarchy().num_nodes().
+  bool is_active(Index v) const noexcept {
+    VARMESH_ASSERT(v < nodes_.size());
+    return node_active(v);
+  }
   std::size_t num_active_vertices() const noexcept { return num_active_; }
   std::size_t num_faces() const noexcept { return num_faces_; }
-  bool face_active(Index f) const noexcept { return faces_[slot_of_[f]].v[0] != kInvalid; }
-  std::array<Index, 3> face(Index f) const noexcept { return faces_[slot_of_[f]].v; }
-  /// The face across edge k (corners k, k+1) of active face f; kInvalid on the border.
+  /// Is original face f a face of the current mesh? Unchecked: f < hierarchy().num_faces().
+  bool face_active(Index f) const noexcept {
+    VARMESH_ASSERT(f < num_slots_);
+    return faces_[slot_of_[f]].v[0] != kInvalid;
+  }
+  /// Corners (active nodes, counter-clockwise) of active face f; all kInvalid when f is inactive.
+  /// Unchecked: f < hierarchy().num_faces().
+  std::array<Index, 3> face(Index f) const noexcept {
+    VARMESH_ASSERT(f < num_slots_);
+    return faces_[slot_of_[f]].v;
+  }
+  /// The face across edge k (corners k, k+1) of active face f; kInvalid on the border (and for an inactive
+  /// f). Unchecked: f < hierarchy().num_faces() and 0 <= k <= 2.
   Index neighbor(Index f, int k) const noexcept {
+    VARMESH_ASSERT(f < num_slots_ && k >= 0 && k <= 2);
     const Index t = faces_[slot_of_[f]].twin[static_cast<std::size_t>(k)];
     return t == kInvalid ? kInvalid : face_of_[t >> 2];
   }
@@ -102,7 +148,9 @@ class SrMesh {
   /// refuses or postpones it (counted). Throws InvalidInput if vs is out of range, a leaf, or its children are
   /// not both active.
   bool ecol(Index vs);
-  /// Would ecol(vs) succeed now without forcing anything? O(k).
+  /// Would ecol(vs) succeed now without forcing anything? False for an id out of range, a leaf, or a node
+  /// whose children are not both active. O(k) for k-vertex 1-rings; no allocation unless a ring has more
+  /// than 32 vertices.
   bool can_ecol(Index vs) const;
 
   /// Splits until every vertex is a leaf / collapses until no ecol is possible. Return the operations done.
@@ -111,12 +159,20 @@ class SrMesh {
 
   /// Active vertices (any order) and faces.
   std::vector<Index> active_vertices() const;
-  /// fn(face, a, b, c) for each active face, in increasing face id order.
+  /// fn(face, a, b, c) for each active face (original face id, corners as node ids), in increasing face id
+  /// order. fn must not change the mesh.
   template <class Fn> void for_each_face(Fn&& fn) const {
     for (Index f = 0; f < num_slots_; ++f) {
       const FaceSlot& fs = faces_[slot_of_[f]];
       if (fs.v[0] != kInvalid) fn(f, fs.v[0], fs.v[1], fs.v[2]);
     }
+  }
+  /// fn(face, pa, pb, pc) for each active face with its corners' positions (the nodes' positions), in
+  /// increasing face id order: what the spatial queries of multitri/spatial_query.hpp read from a front
+  /// (SpatialFront), with the original face id as the face's key (stable). fn must not change the mesh.
+  template <class Fn> void for_each_face_geometry(Fn&& fn) const {
+    const VertexHierarchy& h = *h_;
+    for_each_face([&](Index f, Index a, Index b, Index c) { fn(f, h.position(a), h.position(b), h.position(c)); });
   }
   /// The current mesh with compact vertex numbering; vertex_nodes (optional) receives node id per vertex.
   TriMesh to_mesh(std::vector<Index>* vertex_nodes = nullptr) const;
@@ -125,13 +181,29 @@ class SrMesh {
 
   const SrStats& stats() const noexcept { return stats_; }
   void reset_stats() noexcept { stats_ = {}; }
+  /// Checks the invariants of the file comment. Throws std::logic_error naming the first broken one (a bug
+  /// or an unvalidated hierarchy, see the class comment). O(nodes + faces).
   void validate() const;
 
   /// RefinableFront (multitri/query.hpp): elements are non-leaf hierarchy nodes; refining one is its vsplit.
+  /// The listings call fn with the mesh unchanged: fn must not change it. is_coarsenable and two listings
+  /// have a const overload, which keeps nothing in the mesh (threads may share it, see the file comment),
+  /// and a non-const one, which update() calls and which reuses buffers kept in the mesh: same answers, same
+  /// order.
+  /// Unchecked: e < hierarchy().num_nodes().
   ElementBound element_bound(Index e) const noexcept { return h_->bound(e); }
-  bool is_refined(Index e) const noexcept { return node_refined(e); }
-  bool is_coarsenable(Index e) const { return node_refined(e) && can_ecol(e); }
+  /// Unchecked: e < hierarchy().num_nodes().
+  bool is_refined(Index e) const noexcept {
+    VARMESH_ASSERT(e < nodes_.size());
+    return node_refined(e);
+  }
+  /// can_ecol(e) (checked: false out of range). The const overload walks rings of its own, as can_ecol;
+  /// the non-const one, which update() calls, keeps the rings it walked in the mesh for the coarsen_one(e)
+  /// that usually follows (one walk instead of two per collapse). Same answer.
+  bool is_coarsenable(Index e) const { return can_ecol(e); }
+  bool is_coarsenable(Index e);
   std::uint64_t tie_key(Index e) const noexcept { return static_cast<std::uint64_t>(h_->num_nodes() - e); }
+  /// Back to the base mesh (statistics kept). O(nodes + faces).
   void reset();
   template <class Sink> void refine(Index e, Sink&& sink) {
     check_node(e, "refine");
@@ -150,23 +222,18 @@ class SrMesh {
   // The candidates' bounds (and a child's record) are read soon after by the query and by vsplit, in an
   // order unrelated to their addresses: asking for them while listing overlaps those cache misses.
   template <class Fn> void for_each_refine_candidate(Fn&& fn) const {
-    // Filtered into a buffer without branches first: whether a vertex qualifies is hard to predict.
-    const auto leaves = static_cast<Index>(h_->num_leaves());
+    std::array<Index, 256> out;  // written before read
     const std::size_t n = active_list_.size();
-    if (list_buf_.size() < n) list_buf_.resize(n);
-    Index* out = list_buf_.data();
-    std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Index v = active_list_[i];
-      out[m] = v;
-      m += v >= leaves;
-    }
-    for (std::size_t j = 0; j < m; ++j) {
-      prefetch_line(&h_->bound(out[j]));
-      fn(out[j]);
-    }
+    for (std::size_t from = 0; from < n; from += out.size())
+      refine_candidates(from, std::min(n, from + out.size()), out.data(), fn);
   }
+  template <class Fn> void for_each_refine_candidate(Fn&& fn) {
+    if (list_buf_.size() < active_list_.size()) list_buf_.resize(active_list_.size());
+    refine_candidates(0, active_list_.size(), list_buf_.data(), fn);
+  }
+  /// Unchecked: e is a non-leaf node (hierarchy().num_leaves() <= e < hierarchy().num_nodes()).
   template <class Fn> void for_each_child_candidate(Index e, Fn&& fn) const {
+    VARMESH_ASSERT(e >= h_->num_leaves() && e < h_->num_nodes());
     const Split& r = split_of(e);
     for (Index c : {r.vt, r.vu})
       if (!h_->is_leaf(c)) {
@@ -177,31 +244,20 @@ class SrMesh {
   }
   template <class Fn> void for_each_coarsen_candidate(Fn&& fn) const {
     // The refined nodes whose two children are active are kept in collapsible_ by every vsplit and ecol,
-    // so listing them is a dense scan. Copied first: fn may change the mesh.
+    // so listing them is a dense scan (fn does not change the mesh, so the list stays where it is).
+    const Index* list = collapsible_.data();
     const std::size_t m = collapsible_.size();
-    if (list_buf_.size() < m) list_buf_.resize(m);
-    Index* out = list_buf_.data();
-    std::copy(collapsible_.begin(), collapsible_.end(), out);
     for (std::size_t j = 0; j < m; ++j) {
-      prefetch_line(&h_->bound(out[j]));
-      fn(out[j]);
+      prefetch_line(&h_->bound(list[j]));
+      fn(list[j]);
     }
   }
+  /// Unchecked: e < hierarchy().num_nodes().
   template <class Fn> void for_each_parent_candidate(Index e, Fn&& fn) const {
-    const Index p = h_->parent(e);
-    if (p != kInvalid) fn(p);
-    // Collapsing e can make the collapses next to it legal: Hoppe's ecol needs its fn faces and Xia-Varshney's
-    // its stored rings, and a Kim-Lee ecol postponed by the degenerate case needs a common neighbour gone. So
-    // the collapsible parents of e's neighbours are candidates again too; without them update() stopped short
-    // of extract()'s answer under Hoppe-97 and Xia-Varshney (and a second update() changed the mesh).
-    if (!node_active(e)) return;
-    gather_ring(nodes_[e].corner, ring3_);
-    const std::size_t nn = ring3_.size() + (ring3_.closed ? 0 : 1);
-    for (std::size_t i = 0; i < nn; ++i) {
-      const Index q = h_->parent(ring_neighbor(ring3_, i));
-      if (q != kInvalid && q != p && collapsible(q)) fn(q);
-    }
+    Ring ring;  // this call's own
+    parent_candidates(e, ring, fn);
   }
+  template <class Fn> void for_each_parent_candidate(Index e, Fn&& fn) { parent_candidates(e, ring3_, fn); }
 
  private:
   static void prefetch_line(const void* p) noexcept {
@@ -244,19 +300,31 @@ class SrMesh {
     return node_refined(v) && node_active(r.vt) && node_active(r.vu);
   }
   // One fan around a vertex as half-edges leaving it, counter-clockwise in buf[lo, hi); `closed` when it
-  // wraps around. Filled from both ends at once so that the two walks' cache misses overlap.
+  // wraps around. Filled from both ends at once so that the two walks' cache misses overlap. The first
+  // kInline half-edges are stored in the object, so a ring on the stack costs no allocation (a fan of
+  // more than about kInline / 2 faces one way moves to `big`). Scratch: a copy or a move is an empty ring
+  // (never a copy of buf, which may point into the source's own storage).
   struct Ring {
-    std::vector<Index> buf;
+    static constexpr std::size_t kInline = 128;
+    std::array<Index, kInline> small;  // written before read
+    std::vector<Index> big;
+    Index* buf = small.data();
+    std::size_t cap = kInline;
     std::size_t lo = 0, hi = 0;
     bool closed = false;
     Index fwd = kInvalid, back = kInvalid;  // the two walks' last half-edges (see ring_step)
     bool fwd_open = false, back_open = false;
+    Ring() noexcept {}
+    Ring(const Ring&) noexcept {}
+    Ring& operator=(const Ring&) noexcept { return *this; }
     std::size_t size() const noexcept { return hi - lo; }
     Index operator[](std::size_t i) const noexcept { return buf[lo + i]; }
   };
   static constexpr Index he(Index f, int k) noexcept { return 4 * f + static_cast<Index>(k); }
-  static constexpr Index next_corner(Index k) noexcept { return k == 2 ? 0 : k + 1; }
-  static constexpr Index prev_corner(Index k) noexcept { return k == 0 ? 2 : k - 1; }
+  // (k + 1) mod 3 and (k + 2) mod 3 for k in 0..2, read from two bits per k of a constant: no branch for the
+  // compiler to choose (a mispredicted one cost the ecol's neighbour walk some 8 ns).
+  static constexpr Index next_corner(Index k) noexcept { return (0x09u >> (2 * k)) & 3u; }
+  static constexpr Index prev_corner(Index k) noexcept { return (0x12u >> (2 * k)) & 3u; }
   Index corner_node(Index h) const noexcept { return faces_[h >> 2].v[h & 3]; }
   Index head(Index h) const noexcept { return faces_[h >> 2].v[next_corner(h & 3)]; }   // neighbour a
   Index third(Index h) const noexcept { return faces_[h >> 2].v[prev_corner(h & 3)]; }  // neighbour b
@@ -269,21 +337,62 @@ class SrMesh {
     return i < ring.size() ? head(ring[i]) : third(ring[ring.size() - 1]);
   }
 
+  // The listings' work, on buffers their two overloads provide. Refine candidates: the active non-leaf
+  // vertices among active_list_[from, to), filtered without branches into `out` first (whether a vertex
+  // qualifies is hard to predict); the candidates' bounds are asked for as they are listed.
+  template <class Fn> void refine_candidates(std::size_t from, std::size_t to, Index* out, Fn& fn) const {
+    const auto leaves = static_cast<Index>(h_->num_leaves());
+    std::size_t m = 0;
+    for (std::size_t i = from; i < to; ++i) {
+      const Index v = active_list_[i];
+      out[m] = v;
+      m += v >= leaves;
+    }
+    for (std::size_t j = 0; j < m; ++j) {
+      prefetch_line(&h_->bound(out[j]));
+      fn(out[j]);
+    }
+  }
+  template <class Fn> void parent_candidates(Index e, Ring& ring, Fn& fn) const {
+    VARMESH_ASSERT(e < nodes_.size());
+    const Index p = h_->parent(e);
+    if (p != kInvalid) fn(p);
+    // Collapsing e can make the collapses next to it legal: Hoppe's ecol needs its fn faces and Xia-Varshney's
+    // its stored rings, and a Kim-Lee ecol postponed by the degenerate case needs a common neighbour gone. So
+    // the collapsible parents of e's neighbours are candidates again too; without them update() stopped short
+    // of extract()'s answer under Hoppe-97 and Xia-Varshney (and a second update() changed the mesh).
+    if (!node_active(e)) return;
+    gather_ring(nodes_[e].corner, ring);
+    const std::size_t nn = ring.size() + (ring.closed ? 0 : 1);
+    for (std::size_t i = 0; i < nn; ++i) {
+      const Index q = h_->parent(ring_neighbor(ring, i));
+      if (q != kInvalid && q != p && collapsible(q)) fn(q);
+    }
+  }
+
   // Look-ahead for refine_all/coarsen_all: touch the fan around half-edge h `steps` faces out each way
   // (those faces were asked for by an earlier call) and ask for the next ones; see refine_all.
   void prefetch_fan(Index h, int steps) const noexcept;
   void prefetch_vsplit(Index vs, int stage) const noexcept;
   void prefetch_ecol(Index vs, int stage) const noexcept;
   void do_vsplit(Index vs, Index vl, Index vr, int pl, int pr);  // on ring_, cut vertices and their places given
-  void do_ecol(Index vs);  // uses ring_/ring2_ left by extra_common_neighbors(vs)
+  void do_ecol(Index vs);  // uses ring_/ring2_ left by extra_common_neighbors_kept(vs)
   Index active_ancestor(Index leaf) const noexcept;
   bool vsplit_kim_lee(Index vs);
   bool vsplit_hoppe(Index vs);
   bool vsplit_xv(Index vs, int depth);
   bool ecol_xv(Index vs, int depth);
   bool make_active_xv(Index n, int depth);
-  bool extra_common_neighbors(Index vs) const;
-  bool extra_common_neighbors_walk(Index vs) const;
+  // Section 4.4: do vt and vu share a neighbour besides the cut vertices? Leaves their rings in rt, ru.
+  bool extra_common_neighbors(Index vs, Ring& rt, Ring& ru) const;
+  // Its case of a ring over 32 vertices: does a neighbour of the first ring's centre, not in `except`, also
+  // neighbour the second's?
+  bool long_rings_share(const Ring& rt, std::size_t nt, const Ring& ru, std::size_t nu,
+                        const std::array<Index, 3>& except) const;
+  // The same on ring_/ring2_, remembered until the mesh or ring_ changes (ecn_).
+  bool extra_common_neighbors_kept(Index vs);
+  // can_ecol(vs) up to the common-neighbour test.
+  bool ecol_rule_allows(Index vs) const;
   bool hoppe_ecol_legal(Index vs) const;
   bool xv_ring_matches(Index vs) const;
   void refine_forced(Index e);
@@ -291,8 +400,12 @@ class SrMesh {
   void check_node(Index v, const char* what) const;
   void build_base();
 
+  // Everything below but the scratch (rings, list_buf_, ecn_) is listed in swap(): a member added here must
+  // be added there.
+  void swap(SrMesh& other) noexcept;
+
   const VertexHierarchy* h_;
-  RefinementScheme scheme_;
+  RefinementScheme scheme_ = RefinementScheme::kKimLee;
   Index num_slots_ = 0;
   // Face slots are original faces renumbered in vsplit order (Hoppe's implicit layout): the base faces,
   // then fl^ and fr^ of the last collapse, of the one before, and so on. The faces of a coarse mesh are
@@ -330,13 +443,23 @@ class SrMesh {
   void add_collapsible(Index p) { list_insert<&NodeSlot::corner>(collapsible_, p); }
   void remove_collapsible(Index p) { list_erase<&NodeSlot::corner>(collapsible_, p); }
   SrStats stats_;
-  mutable std::vector<Index> list_buf_;  // scratch of the candidate listings
-  mutable Ring ring_, ring2_, ring3_;  // ring3_: for_each_parent_candidate's, apart from vsplit's and ecol's
-  mutable Index ecn_for_ = kInvalid;  // extra_common_neighbors(ecn_for_) is ecn_result_, rings in ring_/ring2_
-  mutable bool ecn_result_ = false;
-  mutable std::vector<Index> nbrs_;  // scratch: the neighbours of vt in extra_common_neighbors
-  mutable std::vector<std::uint32_t> mark_;
-  mutable std::uint32_t stamp_ = 0;
+  // Scratch of the non-const members (const members use buffers of their own): the rings of vsplit and
+  // ecol, ring3_ of for_each_parent_candidate, list_buf_ of for_each_refine_candidate.
+  Ring ring_, ring2_, ring3_;
+  std::vector<Index> list_buf_;
+  // extra_common_neighbors(vs, ring_, ring2_) was `result` (vs == kInvalid: nothing kept). Every change of
+  // the mesh or of ring_ forgets it; a copy starts with nothing kept (its rings are empty).
+  struct KeptAnswer {
+    Index vs = kInvalid;
+    bool result = false;
+    KeptAnswer() noexcept {}
+    KeptAnswer(const KeptAnswer&) noexcept {}
+    KeptAnswer& operator=(const KeptAnswer&) noexcept {
+      vs = kInvalid;
+      return *this;
+    }
+  };
+  KeptAnswer ecn_;
   std::vector<std::uint8_t> in_progress_;  // Xia-Varshney cycle guard
   void (*sink_)(void*, Index) = nullptr;
   void* sink_ctx_ = nullptr;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
@@ -23,7 +24,29 @@ namespace {
 
 int VertexHierarchy::depth(Index v) const noexcept {
   const std::uint64_t mask = (node_bits_ >= 64) ? ~0ull : ((1ull << node_bits_) - 1ull);
-  return static_cast<int>(std::bit_width(keys_[v].value & mask)) - 1;
+  return static_cast<int>(std::bit_width(key(v).value & mask)) - 1;
+}
+
+void VertexHierarchy::swap(VertexHierarchy& o) noexcept {
+  using std::swap;
+  swap(num_leaves_, o.num_leaves_);
+  swap(positions_, o.positions_);
+  swap(colors_, o.colors_);
+  swap(parent_, o.parent_);
+  swap(records_, o.records_);
+  swap(faces_, o.faces_);
+  swap(face_creator_, o.face_creator_);
+  swap(roots_, o.roots_);
+  swap(base_faces_, o.base_faces_);
+  swap(bounds_, o.bounds_);
+  swap(ring_offsets_, o.ring_offsets_);
+  swap(ring_items_, o.ring_items_);
+  swap(keys_, o.keys_);
+  swap(node_bits_, o.node_bits_);
+  swap(leaf_to_input_, o.leaf_to_input_);
+  swap(face_to_input_, o.face_to_input_);
+  swap(locked_, o.locked_);
+  swap(repair_, o.repair_);
 }
 
 std::size_t VertexHierarchy::memory_bytes() const noexcept {

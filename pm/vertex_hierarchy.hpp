@@ -37,11 +37,13 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "multitri/bounds.hpp"
+#include "multitri/detail/assert.hpp"
 #include "multitri/types.hpp"
 
 namespace varmesh {
@@ -85,53 +87,107 @@ struct InputRepairReport {
 
 /// The immutable hierarchy. Built by build_vertex_hierarchy (qem_analysis.hpp), saved and loaded by
 /// hierarchy_io.hpp; read by SrMesh (sr_mesh.hpp) and the dual-piece oracle (dual_pieces.hpp).
+///
+/// A default-constructed hierarchy is empty (no node, no face); so is a moved-from one. The accessors that
+/// take an id are unchecked, as std::vector::operator[] is: each states the range its id must be in, and
+/// VARMESH_ASSERT checks it in debug and sanitizer builds. Const members only read: threads may share a
+/// hierarchy freely.
 class VertexHierarchy {
  public:
+  VertexHierarchy() = default;
+  VertexHierarchy(const VertexHierarchy&) = default;
+  VertexHierarchy& operator=(const VertexHierarchy&) = default;
+  /// Leaves `other` empty, as default-constructed.
+  VertexHierarchy(VertexHierarchy&& other) noexcept { swap(other); }
+  VertexHierarchy& operator=(VertexHierarchy&& other) noexcept {
+    if (this != &other) {
+      VertexHierarchy taken(std::move(other));
+      swap(taken);
+    }
+    return *this;
+  }
+  ~VertexHierarchy() = default;
+
   std::size_t num_leaves() const noexcept { return num_leaves_; }
   std::size_t num_nodes() const noexcept { return positions_.size(); }
   std::size_t num_collapses() const noexcept { return records_.size(); }
   std::size_t num_faces() const noexcept { return faces_.size() / 3; }
   std::size_t num_roots() const noexcept { return roots_.size(); }
 
+  /// Any v (no access): v < num_leaves().
   bool is_leaf(Index v) const noexcept { return v < num_leaves_; }
-  /// Collapse record of a non-leaf node vs (vs >= num_leaves()).
-  const CollapseRecord& record(Index vs) const noexcept { return records_[vs - num_leaves_]; }
-  Index parent(Index v) const noexcept { return parent_[v]; }
+  /// Collapse record of non-leaf node vs. Unchecked: num_leaves() <= vs < num_nodes().
+  const CollapseRecord& record(Index vs) const noexcept {
+    VARMESH_ASSERT(vs >= num_leaves_ && vs < positions_.size());
+    return records_[vs - num_leaves_];
+  }
+  /// kInvalid for a root. Unchecked: v < num_nodes().
+  Index parent(Index v) const noexcept {
+    VARMESH_ASSERT(v < parent_.size());
+    return parent_[v];
+  }
+  /// Children of non-leaf node vs. Unchecked: num_leaves() <= vs < num_nodes().
   Index vt(Index vs) const noexcept { return record(vs).vt; }
   Index vu(Index vs) const noexcept { return record(vs).vu; }
+  /// The other child of v's parent; kInvalid for a root. Unchecked: v < num_nodes().
   Index sibling(Index v) const noexcept {
-    const Index p = parent_[v];
+    const Index p = parent(v);
     return p == kInvalid ? kInvalid : (vt(p) == v ? vu(p) : vt(p));
   }
-  /// Original face f: three leaves, counter-clockwise.
-  std::array<Index, 3> face(Index f) const noexcept { return {faces_[3 * f], faces_[3 * f + 1], faces_[3 * f + 2]}; }
+  /// Original face f: three leaves, counter-clockwise. Unchecked: f < num_faces().
+  std::array<Index, 3> face(Index f) const noexcept {
+    VARMESH_ASSERT(f < num_faces());
+    return {faces_[3 * f], faces_[3 * f + 1], faces_[3 * f + 2]};
+  }
   std::span<const Index> face_corners() const noexcept { return faces_; }
   /// The node whose vsplit creates original face f (the vs whose fl^ or fr^ is f); kInvalid for base faces.
-  Index face_creator(Index f) const noexcept { return face_creator_[f]; }
+  /// Unchecked: f < num_faces().
+  Index face_creator(Index f) const noexcept {
+    VARMESH_ASSERT(f < face_creator_.size());
+    return face_creator_[f];
+  }
   std::span<const Index> roots() const noexcept { return roots_; }
   /// Base mesh M^0: original faces whose corners have three distinct roots, relabelled by the roots.
   std::span<const Index> base_faces() const noexcept { return base_faces_; }
 
-  const glm::vec3& position(Index v) const noexcept { return positions_[v]; }
+  /// Unchecked: v < num_nodes().
+  const glm::vec3& position(Index v) const noexcept {
+    VARMESH_ASSERT(v < positions_.size());
+    return positions_[v];
+  }
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
   bool has_colors() const noexcept { return !colors_.empty(); }
-  const glm::vec3& color(Index v) const noexcept { return colors_[v]; }
+  /// Unchecked: has_colors() and v < num_nodes().
+  const glm::vec3& color(Index v) const noexcept {
+    VARMESH_ASSERT(v < colors_.size());
+    return colors_[v];
+  }
   std::span<const glm::vec3> colors() const noexcept { return colors_; }
-  /// Sphere, cone and error of node v (nested: a parent's bound contains its children's).
-  const ElementBound& bound(Index v) const noexcept { return bounds_[v]; }
-  /// Xia-Varshney 1996 topological detail: the 1-ring of vs in M^i right after collapse i.
+  /// Sphere, cone and error of node v (nested: a parent's bound contains its children's). Unchecked:
+  /// v < num_nodes().
+  const ElementBound& bound(Index v) const noexcept {
+    VARMESH_ASSERT(v < bounds_.size());
+    return bounds_[v];
+  }
+  /// Xia-Varshney 1996 topological detail: the 1-ring of vs in M^i right after collapse i. Unchecked:
+  /// num_leaves() <= vs < num_nodes().
   std::span<const Index> stored_ring(Index vs) const noexcept {
+    VARMESH_ASSERT(vs >= num_leaves_ && vs < positions_.size());
     const std::size_t i = vs - num_leaves_;
     return {ring_items_.data() + ring_offsets_[i], ring_items_.data() + ring_offsets_[i + 1]};
   }
 
-  NodeKey key(Index v) const noexcept { return keys_[v]; }
-  int node_bits() const noexcept { return node_bits_; }
-  /// O(1): is a an ancestor of b, or b itself (Kim-Lee section 4.3)?
-  bool is_ancestor_or_self(Index a, Index b) const noexcept {
-    return varmesh::is_ancestor_or_self(keys_[a], keys_[b], node_bits_);
+  /// Unchecked: v < num_nodes().
+  NodeKey key(Index v) const noexcept {
+    VARMESH_ASSERT(v < keys_.size());
+    return keys_[v];
   }
-  /// Depth of v below its root (0 for a root). O(1).
+  int node_bits() const noexcept { return node_bits_; }
+  /// O(1): is a an ancestor of b, or b itself (Kim-Lee section 4.3)? Unchecked: a, b < num_nodes().
+  bool is_ancestor_or_self(Index a, Index b) const noexcept {
+    return varmesh::is_ancestor_or_self(key(a), key(b), node_bits_);
+  }
+  /// Depth of v below its root (0 for a root). O(1). Unchecked: v < num_nodes().
   int depth(Index v) const noexcept;
   /// Largest depth of any node.
   int max_depth() const noexcept { return node_bits_ - 1; }
@@ -141,11 +197,17 @@ class VertexHierarchy {
   std::span<const Index> leaf_to_input() const noexcept { return leaf_to_input_; }
   std::span<const Index> face_to_input() const noexcept { return face_to_input_; }
   /// Leaves that the analysis was told never to collapse (non-manifold copies under NonManifoldPolicy::kLock).
-  bool is_locked(Index leaf) const noexcept { return !locked_.empty() && locked_[leaf] != 0; }
+  /// Unchecked: leaf < num_leaves().
+  bool is_locked(Index leaf) const noexcept {
+    VARMESH_ASSERT(leaf < num_leaves_);
+    return !locked_.empty() && locked_[leaf] != 0;
+  }
   const InputRepairReport& repair_report() const noexcept { return repair_; }
 
-  /// Throws std::logic_error naming the first broken invariant (see the header comment). O(nodes + faces)
-  /// for the records, plus the replay of the collapses: O(sum over collapses of the faces around both ends).
+  /// Checks the invariants of the header comment. Throws std::logic_error (not InvalidInput: a failure is
+  /// a broken invariant, a bug of the analysis or an edited file that the reader would have refused)
+  /// naming the first broken one. An empty hierarchy passes. O(nodes + faces) for the records, plus the
+  /// replay of the collapses: O(sum over collapses of the faces around both ends).
   void validate() const;
   /// Bytes held by the arrays the synthesis phase reads.
   std::size_t memory_bytes() const noexcept;
@@ -156,6 +218,8 @@ class VertexHierarchy {
 
   // The topological part of validate() (see the header comment).
   void check_collapses() const;
+  // Exchanges every member below: a member added there must be added here.
+  void swap(VertexHierarchy& other) noexcept;
 
   std::size_t num_leaves_ = 0;
   std::vector<glm::vec3> positions_;
@@ -167,7 +231,7 @@ class VertexHierarchy {
   std::vector<Index> roots_;
   std::vector<Index> base_faces_;
   std::vector<ElementBound> bounds_;
-  std::vector<Index> ring_offsets_{0}, ring_items_;
+  std::vector<Index> ring_offsets_, ring_items_;  // offsets: empty or num_collapses() + 1
   std::vector<NodeKey> keys_;
   int node_bits_ = 1;
   std::vector<Index> leaf_to_input_, face_to_input_;

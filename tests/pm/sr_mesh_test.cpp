@@ -14,9 +14,12 @@
 #include <filesystem>
 #include <iterator>
 #include <random>
+#include <set>
 #include <stdexcept>
 #include <span>
 #include <string>
+#include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -24,6 +27,7 @@
 
 #include "multitri/errors.hpp"
 #include "multitri/mesh_io.hpp"
+#include "multitri/query.hpp"
 #include "pm/dual_pieces.hpp"
 #include "pm/qem_analysis.hpp"
 #include "pm_fixtures.hpp"
@@ -995,6 +999,18 @@ TEST(SrMesh, CandidateListingsMatchAScanOfAllNodes) {
       std::vector<Index> refine, coarsen, want_refine, want_coarsen;
       sr.for_each_refine_candidate([&](Index e) { refine.push_back(e); });
       sr.for_each_coarsen_candidate([&](Index e) { coarsen.push_back(e); });
+      // The const overloads (buffers of their own) list the same in the same order as the non-const ones
+      // (buffers kept in the mesh), and so do is_coarsenable's.
+      const SrMesh& cs = sr;
+      std::vector<Index> refine_const, parents, parents_const;
+      cs.for_each_refine_candidate([&](Index e) { refine_const.push_back(e); });
+      EXPECT_EQ(refine_const, refine);
+      for (Index v = 0; v < h.num_nodes(); ++v) {
+        sr.for_each_parent_candidate(v, [&](Index p) { parents.push_back(p); });
+        cs.for_each_parent_candidate(v, [&](Index p) { parents_const.push_back(p); });
+        EXPECT_EQ(sr.is_coarsenable(v), cs.is_coarsenable(v)) << v;
+      }
+      EXPECT_EQ(parents, parents_const);
       for (Index v = 0; v < h.num_nodes(); ++v) {
         const SrMesh::State st = sr.state(v);
         EXPECT_EQ(st == SrMesh::State::kActive, sr.is_active(v)) << v;
@@ -1082,7 +1098,283 @@ TEST(SrMesh, RejectsBadRequests) {
   if (!h.is_leaf(root)) {
     EXPECT_THROW(sr.ecol(root), InvalidInput);  // children inactive
   }
+  // The checked queries answer false for any id.
+  for (const Index v : {Index{0}, static_cast<Index>(h.num_nodes()), Index{1} << 30, kInvalid}) {
+    EXPECT_FALSE(sr.can_ecol(v)) << v;
+    EXPECT_FALSE(sr.is_coarsenable(v)) << v;
+  }
+  // A scheme outside the enumeration used to be accepted, every vsplit then returning false.
+  EXPECT_THROW(SrMesh(h, static_cast<RefinementScheme>(5)), InvalidInput);
+  EXPECT_STREQ(scheme_name(static_cast<RefinementScheme>(5)), "?");
+  for (const RefinementScheme scheme : kSchemes) EXPECT_STRNE(scheme_name(scheme), "?");
 }
+
+// The mesh keeps a reference to its hierarchy: built from a temporary (SrMesh sr(build_vertex_hierarchy(m)))
+// it read freed memory at its first query. Such a constructor call no longer compiles.
+static_assert(!std::is_constructible_v<SrMesh, VertexHierarchy>);
+static_assert(!std::is_constructible_v<SrMesh, VertexHierarchy&&, RefinementScheme>);
+static_assert(!std::is_constructible_v<SrMesh, const VertexHierarchy&&>);
+static_assert(std::is_constructible_v<SrMesh, VertexHierarchy&>);
+static_assert(std::is_constructible_v<SrMesh, const VertexHierarchy&, RefinementScheme>);
+static_assert(std::is_nothrow_move_constructible_v<SrMesh> && std::is_nothrow_move_assignable_v<SrMesh>);
+static_assert(std::is_copy_constructible_v<SrMesh> && std::is_copy_assignable_v<SrMesh>);
+
+// What a moved-from mesh is: the empty mesh over an empty hierarchy, whose members all work (the implicit
+// moves left stale counts over emptied arrays: to_mesh() bound a reference to null, reset() crashed).
+void expect_empty_mesh(SrMesh& m) {
+  EXPECT_EQ(m.hierarchy().num_nodes(), 0u);
+  EXPECT_EQ(m.hierarchy().num_faces(), 0u);
+  EXPECT_EQ(m.scheme(), RefinementScheme::kKimLee);
+  EXPECT_EQ(m.num_faces(), 0u);
+  EXPECT_EQ(m.num_active_vertices(), 0u);
+  EXPECT_TRUE(m.active_vertices().empty());
+  EXPECT_EQ(m.stats().vsplits + m.stats().ecols, 0u);
+  std::vector<Index> nodes{1, 2, 3};
+  const TriMesh t = m.to_mesh(&nodes);
+  EXPECT_EQ(t.num_faces(), 0u);
+  EXPECT_EQ(t.num_vertices(), 0u);
+  EXPECT_TRUE(nodes.empty());
+  EXPECT_NO_THROW(m.validate());
+  int calls = 0;
+  m.for_each_face([&](Index, Index, Index, Index) { ++calls; });
+  m.for_each_refine_candidate([&](Index) { ++calls; });
+  m.for_each_coarsen_candidate([&](Index) { ++calls; });
+  EXPECT_EQ(calls, 0);
+  EXPECT_FALSE(m.can_ecol(0));
+  EXPECT_THROW(m.vsplit(0), InvalidInput);
+  EXPECT_THROW(m.ecol(0), InvalidInput);
+  m.reset();
+  EXPECT_EQ(m.refine_all(), 0u);
+  EXPECT_EQ(m.coarsen_all(), 0u);
+  Query q;
+  q.criterion = Criterion::object_error(0.0f);
+  extract(m, q);
+  update(m, q);
+  EXPECT_EQ(m.num_faces(), 0u);
+  EXPECT_GT(m.memory_bytes(), 0u);
+  EXPECT_NO_THROW(m.validate());
+}
+
+TEST(SrMesh, MovedFromIsTheEmptyMesh) {
+  const VertexHierarchy h = full_hierarchy(make_torus(16, 8));
+  for (const RefinementScheme scheme : kSchemes) {
+    SCOPED_TRACE(scheme_name(scheme));
+    SrMesh a(h, scheme);
+    WalkOptions o;
+    o.ops = 200, o.seed = 5;
+    ASSERT_TRUE(checked_walk(a, o).ok);
+    const TriMesh before = a.to_mesh();
+    const SrStats stats = a.stats();
+
+    SrMesh b(std::move(a));
+    expect_empty_mesh(a);
+    EXPECT_EQ(&b.hierarchy(), &h);
+    EXPECT_EQ(b.scheme(), scheme);
+    EXPECT_EQ(b.to_mesh().indices, before.indices);
+    EXPECT_EQ(b.stats().vsplits, stats.vsplits);
+    b.validate();
+
+    // Assigned to, a moved-from mesh is whole again; the source of a move assignment is left empty too.
+    a = std::move(b);
+    expect_empty_mesh(b);
+    EXPECT_EQ(a.to_mesh().indices, before.indices);
+    o.seed = 6;
+    ASSERT_TRUE(checked_walk(a, o).ok);
+    b = a;  // a copy into a moved-from mesh
+    EXPECT_EQ(b.to_mesh().indices, a.to_mesh().indices);
+    b.validate();
+    SrMesh c(h, scheme);
+    c = std::move(a);  // over a mesh that had arrays of its own
+    EXPECT_EQ(c.to_mesh().indices, b.to_mesh().indices);
+    c.refine_all();
+    c.validate();
+    EXPECT_EQ(c.num_faces(), h.num_faces());
+    a = SrMesh(h, scheme);
+    EXPECT_EQ(a.num_faces(), h.base_faces().size());
+  }
+}
+
+// A vertex with many neighbours: a bipyramid over an n-gon (two apexes of valence n).
+TriMesh bipyramid(int n) {
+  TriMesh m;
+  for (int i = 0; i < n; ++i) {
+    const float a = 6.2831853f * static_cast<float>(i) / static_cast<float>(n);
+    m.positions.push_back({std::cos(a), std::sin(a), 0.0f});
+  }
+  const auto top = static_cast<Index>(n), bottom = static_cast<Index>(n + 1);
+  m.positions.push_back({0.0f, 0.0f, 0.7f});
+  m.positions.push_back({0.0f, 0.0f, -0.7f});
+  for (int i = 0; i < n; ++i) {
+    const auto p = static_cast<Index>(i), q = static_cast<Index>((i + 1) % n);
+    m.indices.insert(m.indices.end(), {p, q, top, q, p, bottom});
+  }
+  return m;
+}
+
+// Section 4.4 on a vertex of many neighbours (the "11" of degenerate_case_hierarchy() made the apex of a
+// bipyramid): a vertex t inside face (0, 1, top); A merges t into 0, then B merges top and 1 (cut vertices 2
+// and A). With every leaf active, top (n + 1 neighbours) and 1 share 0 besides the cut vertices t and 2, so
+// ecol(B) is postponed; ecol(A) is not.
+VertexHierarchy long_ring_hierarchy(int n) {
+  TriMesh m = bipyramid(n);
+  const auto top = static_cast<Index>(n), t = static_cast<Index>(n + 2);
+  m.positions.push_back((m.positions[0] + m.positions[1] + m.positions[top]) / 3.0f);
+  // bipyramid's first face is (0, 1, top).
+  m.indices.erase(m.indices.begin(), m.indices.begin() + 3);
+  m.indices.insert(m.indices.end(), {0, 1, t, 1, top, t, top, 0, t});
+  return hierarchy_from_collapses(m, {{t, 0}, {top, 1}});
+}
+
+// Section 4.4 read off the face list, apart from SrMesh's ring walks: collapsing vs is postponed when its
+// children vt and vu have a common neighbour besides the third corners vl, vr of the faces fl^, fr^ that
+// the collapse removes.
+bool kim_lee_would_collapse(const SrMesh& sr, Index vs) {
+  const VertexHierarchy& h = sr.hierarchy();
+  const CollapseRecord& r = h.record(vs);
+  std::set<Index> nt, nu, cut;
+  for (const Index f : {r.fl_hat, r.fr_hat})
+    if (f != kInvalid)
+      for (const Index c : sr.face(f))
+        if (c != r.vt && c != r.vu) cut.insert(c);
+  sr.for_each_face([&](Index, Index a, Index b, Index c) {
+    for (const Index x : {a, b, c}) {
+      if (x == r.vt) nt.insert({a, b, c});
+      if (x == r.vu) nu.insert({a, b, c});
+    }
+  });
+  for (const Index n : nt)
+    if (n != r.vt && n != r.vu && nu.count(n) && !cut.count(n)) return false;
+  return true;
+}
+
+// can_ecol walks the two 1-rings with no scratch in the object: against the face-list reading above on
+// short rings and on rings of more than 32 vertices (their own path: a sorted copy), and against what ecol
+// then does, under the three schemes, in the states of random walks.
+TEST(SrMesh, CanEcolMatchesTheCommonNeighbourRuleAndEcol) {
+  struct Case {
+    VertexHierarchy h;
+    bool long_rings;  // some checked collapses have an end with more than 32 neighbours, some are postponed
+  };
+  std::vector<Case> cases;
+  cases.push_back({long_ring_hierarchy(48), true});
+  cases.push_back({full_hierarchy(make_torus(12, 6)), false});
+  cases.push_back({full_hierarchy(make_grid(8, 8)), false});
+  for (const Case& c : cases) {
+    const VertexHierarchy& h = c.h;
+    for (const RefinementScheme scheme : kSchemes) {
+      SCOPED_TRACE(scheme_name(scheme));
+      SrMesh sr(h, scheme);
+      std::size_t checked = 0, long_checked = 0, long_refused = 0;
+      auto check_all = [&] {
+        std::vector<Index> valence(h.num_nodes(), 0);
+        sr.for_each_face([&](Index, Index a, Index b, Index d) { ++valence[a], ++valence[b], ++valence[d]; });
+        std::vector<Index> candidates;
+        sr.for_each_coarsen_candidate([&](Index e) { candidates.push_back(e); });
+        for (const Index e : candidates) {
+          const bool can = sr.can_ecol(e);
+          EXPECT_EQ(sr.is_coarsenable(e), can) << e;
+          if (scheme == RefinementScheme::kKimLee) {
+            EXPECT_EQ(can, kim_lee_would_collapse(sr, e)) << e;
+          }
+          SrMesh trial = sr;
+          const bool did = trial.ecol(e);
+          // Xia-Varshney may force collapses first and then succeed; the others do just what can_ecol says.
+          if (scheme == RefinementScheme::kXiaVarshney ? can && !did : can != did) ADD_FAILURE() << "node " << e;
+          const bool long_ring = std::max(valence[h.vt(e)], valence[h.vu(e)]) > 32;
+          ++checked;
+          long_checked += long_ring ? 1 : 0;
+          long_refused += long_ring && !can ? 1 : 0;
+        }
+      };
+      sr.refine_all();
+      check_all();
+      for (std::uint32_t round = 0; round < 8; ++round) {
+        WalkOptions o;
+        o.ops = 60, o.seed = 100 + round, o.split_bias = 0.5;
+        o.full_every = 0, o.oracle_every = 0, o.validate_every = 0;
+        ASSERT_TRUE(checked_walk(sr, o).ok);
+        check_all();
+      }
+      sr.validate();
+      EXPECT_GE(checked, c.long_rings ? 10u : 50u);
+      if (c.long_rings) {
+        EXPECT_GT(long_checked, 0u) << "no collapse with a ring over 32 vertices was tried";
+        EXPECT_GT(long_refused, 0u) << "no collapse with a ring over 32 vertices was refused";
+      }
+    }
+  }
+}
+
+// Const members only read: two threads asking the same questions of one mesh get the single-threaded
+// answers (can_ecol kept its rings and neighbour marks in the object, and two threads overflowed them).
+TEST(SrMesh, ConstMembersAnswerAlikeFromTwoThreads) {
+  for (const TriMesh& mesh : {make_icosphere(3), bipyramid(48)}) {
+    const VertexHierarchy h = full_hierarchy(mesh);
+    SrMesh sr(h);
+    Query q;
+    q.criterion = Criterion::object_error(1e-3f);
+    extract(sr, q);
+    const SrMesh& cs = sr;
+    struct Answers {
+      std::vector<std::uint8_t> can;
+      std::vector<Index> parents, refine;
+      bool operator==(const Answers&) const = default;
+    };
+    auto ask = [&] {
+      Answers a;
+      for (Index v = 0; v < h.num_nodes(); ++v) a.can.push_back(cs.is_coarsenable(v) ? 1 : 0);
+      for (Index v = 0; v < h.num_nodes(); ++v)
+        if (cs.is_active(v)) cs.for_each_parent_candidate(v, [&](Index p) { a.parents.push_back(p); });
+      cs.for_each_refine_candidate([&](Index e) { a.refine.push_back(e); });
+      return a;
+    };
+    const Answers want = ask();
+    ASSERT_GT(std::count(want.can.begin(), want.can.end(), 1), 10);
+    std::array<int, 2> differ{0, 0};
+    std::array<std::thread, 2> threads;
+    for (std::size_t t = 0; t < threads.size(); ++t)
+      threads[t] = std::thread([&, t] {
+        for (int round = 0; round < 6; ++round) differ[t] += ask() == want ? 0 : 1;
+      });
+    for (std::thread& t : threads) t.join();
+    EXPECT_EQ(differ[0] + differ[1], 0);
+  }
+}
+
+#if defined(VARMESH_ENABLE_ASSERTS) || !defined(NDEBUG)
+// The unchecked accessors state their ranges; debug and sanitizer builds check them (they used to read out
+// of bounds: state/face_active crashed, neighbor(f, 3) read the next face's corner).
+TEST(SrMeshDeathTest, UncheckedAccessorsCheckTheirPreconditionsInDebugBuilds) {
+  const VertexHierarchy h = full_hierarchy(make_torus(8, 6));
+  const SrMesh sr(h);
+  const auto n = static_cast<Index>(h.num_nodes()), nf = static_cast<Index>(h.num_faces());
+  const Index f0 = h.base_faces()[0];
+  EXPECT_DEATH(sr.state(n), "precondition");
+  EXPECT_DEATH(sr.is_active(n), "precondition");
+  EXPECT_DEATH(sr.is_refined(n), "precondition");
+  EXPECT_DEATH(sr.face_active(nf), "precondition");
+  EXPECT_DEATH(sr.face(nf), "precondition");
+  EXPECT_DEATH(sr.neighbor(f0, 3), "precondition");
+  EXPECT_DEATH(sr.neighbor(f0, -1), "precondition");
+  EXPECT_DEATH(sr.element_bound(n), "precondition");
+  EXPECT_DEATH(sr.for_each_child_candidate(0, [](Index) {}), "precondition");  // a leaf
+  EXPECT_DEATH(sr.for_each_parent_candidate(n, [](Index) {}), "precondition");
+  EXPECT_DEATH(h.parent(n), "precondition");
+  EXPECT_DEATH(h.record(0), "precondition");  // a leaf has no record
+  EXPECT_DEATH(h.record(n), "precondition");
+  EXPECT_DEATH(h.stored_ring(0), "precondition");
+  EXPECT_DEATH(h.face(nf), "precondition");
+  EXPECT_DEATH(h.face_creator(nf), "precondition");
+  EXPECT_DEATH(h.position(n), "precondition");
+  EXPECT_DEATH(h.color(0), "precondition");  // no colours
+  EXPECT_DEATH(h.bound(n), "precondition");
+  EXPECT_DEATH(h.key(n), "precondition");
+  EXPECT_DEATH(h.is_locked(static_cast<Index>(h.num_leaves())), "precondition");
+  // In range, they answer.
+  EXPECT_EQ(sr.neighbor(f0, 2) == kInvalid, false);
+  EXPECT_TRUE(sr.face_active(f0));
+}
+#endif
 
 // The real meshes of the walks (skipped, naming the file, when the shared data folder is absent).
 #define VARMESH_REQUIRE_REAL_MESHES(paths)                                    \

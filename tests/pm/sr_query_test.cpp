@@ -2,7 +2,9 @@
 // ready-made criteria, budgets, and the dual-piece oracle on every answer.
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <random>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -11,6 +13,7 @@
 #include "multitri/mesh_distance.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/query.hpp"
+#include "multitri/spatial_query.hpp"
 #include "pm/dual_pieces.hpp"
 #include "pm/qem_analysis.hpp"
 #include "pm/sr_mesh.hpp"
@@ -21,6 +24,7 @@ namespace varmesh {
 namespace {
 
 static_assert(RefinableFront<SrMesh>);
+static_assert(SpatialFront<SrMesh>);  // for_each_face_geometry: pick, locate_point... take the pm front
 
 // Fixpoint: no active non-leaf node is still wanted by the query.
 bool is_fixpoint(const SrMesh& sr, const Query& q) {
@@ -263,6 +267,103 @@ TEST(SrQuery, FeaturePointsAndSilhouette) {
   extract(sr, q);
   EXPECT_TRUE(is_fixpoint(sr, q));
   EXPECT_TRUE(matches_oracle(sr));
+}
+
+// A fixed TriMesh as a front that never changes (searched with FrontMode::kKeep): the reference for the
+// spatial queries on an SrMesh, which must answer as they do on sr.to_mesh()'s faces.
+struct FixedMeshFront {
+  const TriMesh* m;
+  ElementBound element_bound(Index) const noexcept { return {}; }
+  bool is_refined(Index) const noexcept { return false; }
+  bool is_coarsenable(Index) const noexcept { return false; }
+  std::size_t num_faces() const noexcept { return m->num_faces(); }
+  std::uint64_t tie_key(Index e) const noexcept { return e; }
+  void reset() {}
+  template <class Sink> void refine(Index, Sink&&) {}
+  void coarsen_one(Index) {}
+  template <class Fn> void for_each_refine_candidate(Fn&&) const {}
+  template <class Fn> void for_each_child_candidate(Index, Fn&&) const {}
+  template <class Fn> void for_each_coarsen_candidate(Fn&&) const {}
+  template <class Fn> void for_each_parent_candidate(Index, Fn&&) const {}
+  template <class Fn> void for_each_face_geometry(Fn&& fn) const {
+    for (std::size_t f = 0; f < m->num_faces(); ++f)
+      fn(static_cast<Index>(f), m->positions[m->corner(f, 0)], m->positions[m->corner(f, 1)], m->positions[m->corner(f, 2)]);
+  }
+};
+static_assert(SpatialFront<FixedMeshFront>);
+
+// to_mesh() lists the faces in for_each_face order: face i of the mesh is the i-th active original face.
+std::vector<Index> active_face_ids(const SrMesh& sr) {
+  std::vector<Index> ids;
+  sr.for_each_face([&](Index f, Index, Index, Index) { ids.push_back(f); });
+  return ids;
+}
+
+void expect_same_hit(const std::optional<FaceHit>& got, const std::optional<FaceHit>& want, const std::vector<Index>& ids) {
+  ASSERT_EQ(got.has_value(), want.has_value());
+  if (!got) return;
+  EXPECT_EQ(got->key, ids[want->key]);  // SrMesh keys faces by original face id
+  EXPECT_EQ(got->t, want->t);
+  EXPECT_EQ(got->point, want->point);
+  EXPECT_EQ(got->a, want->a);
+  EXPECT_EQ(got->b, want->b);
+  EXPECT_EQ(got->c, want->c);
+}
+
+// README lists SrMesh among the fronts of the spatial queries: pick and locate_point answer the query on
+// the SrMesh (global and local scope, incremental), and agree bit for bit with the same search on the mesh
+// the SrMesh then holds; faces_within and intersect_region return the same faces.
+TEST(SrQuery, SpatialQueriesOnTheSrMeshAgreeWithItsMesh) {
+  const VertexHierarchy grid = build_vertex_hierarchy(testing::make_grid(24, 24, 0.3f));
+  const VertexHierarchy ball = build_vertex_hierarchy(testing::make_icosphere(3));
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(0.05f, 0.95f), angle(0.0f, 6.2831853f);
+  std::size_t hits = 0;
+  for (const QueryScope scope : {QueryScope::kGlobal, QueryScope::kLocal}) {
+    SpatialOptions opt;
+    opt.scope = scope;
+    SpatialOptions keep;
+    keep.mode = FrontMode::kKeep;
+    SrMesh on_grid(grid), on_ball(ball);
+    for (int i = 0; i < 12; ++i) {
+      Query q;
+      q.criterion = Criterion::object_error(i % 2 == 0 ? 0.002f : 0.02f);
+      // Point location on the height field.
+      const glm::vec2 xy(u(rng), u(rng));
+      const std::optional<FaceHit> at = locate_point(on_grid, q, xy, opt);
+      on_grid.validate();
+      const TriMesh gm = on_grid.to_mesh();
+      FixedMeshFront gref{&gm};
+      expect_same_hit(at, locate_point(gref, q, xy, keep), active_face_ids(on_grid));
+      ASSERT_TRUE(at.has_value());
+      EXPECT_TRUE(on_grid.face_active(at->key));
+      // A ray from outside the ball towards a point near its centre.
+      const float a = angle(rng);
+      Ray ray;
+      ray.origin = {3.0f * std::cos(a), 3.0f * std::sin(a), 0.5f * u(rng)};
+      ray.direction = glm::vec3(0.1f * u(rng), 0.0f, 0.0f) - ray.origin;
+      const std::optional<FaceHit> hit = pick(on_ball, q, ray, opt);
+      const TriMesh bm = on_ball.to_mesh();
+      FixedMeshFront bref{&bm};
+      const std::vector<Index> ids = active_face_ids(on_ball);
+      expect_same_hit(hit, pick(bref, q, ray, keep), ids);
+      ASSERT_TRUE(hit.has_value());
+      hits += 2;
+      // The faces near the hit point, and in a box around it, by key.
+      const glm::vec3 p = hit->point;
+      std::vector<Index> near, want_near;
+      for (const FaceHit& f : faces_within(on_ball, q, p, 0.3f, keep)) near.push_back(f.key);
+      for (const FaceHit& f : faces_within(bref, q, p, 0.3f, keep)) want_near.push_back(ids[f.key]);
+      EXPECT_EQ(near, want_near);
+      EXPECT_GT(near.size(), 0u);
+      const Box3 box{p - glm::vec3(0.2f), p + glm::vec3(0.2f)};
+      std::vector<Index> inside, want_inside;
+      for (const FaceHit& f : intersect_region(on_ball, q, box, keep)) inside.push_back(f.key);
+      for (const FaceHit& f : intersect_region(bref, q, box, keep)) want_inside.push_back(ids[f.key]);
+      EXPECT_EQ(inside, want_inside);
+    }
+  }
+  EXPECT_EQ(hits, 48u);
 }
 
 }  // namespace
