@@ -8,7 +8,9 @@
 // its recursive conforming refinement; P. Binev, W. Dahmen, R. DeVore (2004): with a compatible marking the
 // face across a refinement edge is either its twin or one level coarser, so forced splits stop. J. Edmonds
 // (1965): maximum matching in general graphs (pairs of base faces). H. Freudenthal (1942) / H. W. Kuhn
-// (1960): the cube cut into 6 tetrahedra around its main diagonal, consistent across cells.
+// (1960): the cube cut into 6 tetrahedra around its main diagonal, consistent across cells. F. Labelle,
+// J. R. Shewchuk, "Isosurface stuffing" (SIGGRAPH 2007), section 3: lattice vertices near the surface snapped
+// onto it, so that marching tetrahedra makes no needle faces.
 #include "fourk/adaptive.hpp"
 
 #include <algorithm>
@@ -37,6 +39,13 @@ constexpr std::int64_t kLatticeSize = std::int64_t(1) << kLatticeBits;
 constexpr int kMaxLevel = 48;
 // Error given to a sample whose distance to an implicit surface could not be measured: refine it.
 constexpr double kUnmeasured = 1e30;
+// Implicit surfaces: a face whose normal is further than this from the gradient of f at its centroid is split
+// (a fold guard; see ImplicitRefiner::is_folded). 60 degrees: coarse faces of a well-polygonized surface stay
+// below 45 (the torus's base faces that span a third of the tube reach 43), a back-facing fold is beyond 90.
+constexpr double kMaxNormalDeviation = std::numbers::pi / 3.0;
+// polygonize_freudenthal: a grid vertex with a root closer than this fraction of the edge's length moves onto
+// the root (see there). Labelle and Shewchuk snap at up to about a quarter of an edge on their lattice.
+constexpr double kSnapFraction = 0.2;
 
 std::string num(double x) {
   std::ostringstream out;
@@ -112,6 +121,8 @@ class Refiner {
   virtual std::uint64_t edge_key(VertexId a, VertexId b) const = 0;
   virtual VertexId midpoint(VertexId e0, VertexId e1) = 0;
   virtual double face_error(FaceId f, VertexId a, VertexId b, VertexId c) = 0;
+  // A face that must be split whatever its error (implicit surfaces: a folded face).
+  virtual bool is_folded(VertexId, VertexId, VertexId) { return false; }
   virtual std::vector<glm::vec2> domain() const { return {}; }
 
   const AdaptiveOptions& options_;
@@ -134,6 +145,7 @@ class Refiner {
   std::unordered_map<std::uint64_t, std::array<FaceId, 2>> edges_;
   std::vector<FaceId> work_, stack_;
   int max_level_reached_ = 0;
+  std::size_t num_folded_ = 0;
 };
 
 FaceId Refiner::add_child(VertexId apex, VertexId e0, VertexId e1, std::uint8_t level) {
@@ -149,7 +161,13 @@ void Refiner::measure(FaceId f) {
   const WorkFace& w = faces_[f];
   const double e = face_error(f, w.apex, w.e0, w.e1);
   faces_[f].error = static_cast<float>(std::min(e, double(std::numeric_limits<float>::max())));
-  if (faces_[f].error > options_.tolerance) work_.push_back(f);
+  if (faces_[f].error > options_.tolerance) {
+    work_.push_back(f);
+  } else if (w.level < options_.max_level && is_folded(w.apex, w.e0, w.e1)) {
+    // Below max_level only: the fold guard refines, it never fails a build.
+    work_.push_back(f);
+    ++num_folded_;
+  }
 }
 
 void Refiner::link(FaceId f) {
@@ -263,6 +281,7 @@ AdaptiveHierarchy Refiner::run(std::size_t num_unpaired) {
   out.num_base_faces = base_.size();
   out.num_unpaired_base_faces = num_unpaired;
   out.max_level = max_level_reached_;
+  out.num_folded_faces = num_folded_;
   out.domain = domain();
   std::vector<FaceId> face_new_to_old;
   out.mt = std::move(builder_).build(options_.build, nullptr, &face_new_to_old);
@@ -510,8 +529,9 @@ glm::dvec3 face_normal(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec
 
 class ImplicitRefiner final : public Refiner {
  public:
-  ImplicitRefiner(const AdaptiveOptions& options, std::string who, const ImplicitField& field)
-      : Refiner(options, std::move(who)), field_(field) {}
+  // side: +1 when the base's face normals point towards f > 0, -1 when towards f < 0.
+  ImplicitRefiner(const AdaptiveOptions& options, std::string who, const ImplicitField& field, double side)
+      : Refiner(options, std::move(who)), field_(field), side_(side) {}
 
   AdaptiveHierarchy build(const TriMesh& base, std::span<const std::uint8_t> marking, std::size_t num_unpaired) {
     for (const glm::vec3& p : base.positions) add_vertex(p);
@@ -544,8 +564,26 @@ class ImplicitRefiner final : public Refiner {
     return err;
   }
 
+  // The distance test cannot see a fold: a face standing across the surface (in the plane of a meridian of the
+  // torus, say) keeps all its points close to the surface. So a face whose normal is more than
+  // kMaxNormalDeviation from the gradient at its centroid is split too, while its longest edge exceeds the
+  // tolerance: a fold from a projected midpoint (the sagitta of a long chord exceeding the face's width) goes
+  // away as the faces shrink, a face turned over in the surface's tangent plane (a base that does not resolve
+  // the surface) never does, and the bound on edge lengths keeps its refinement finite, about (area /
+  // tolerance^2) faces. side_ is +1 when the base's normals point towards f > 0, -1 when towards f < 0.
+  bool is_folded(VertexId a, VertexId b, VertexId c) override {
+    const glm::dvec3 pa(positions_[a]), pb(positions_[b]), pc(positions_[c]);
+    const double longest = std::max({glm::length(pb - pa), glm::length(pc - pb), glm::length(pa - pc)});
+    if (!(longest > double(options_.tolerance))) return false;
+    const glm::dvec3 g = field_.gradient((pa + pb + pc) / 3.0);
+    const double len = glm::length(g);
+    if (!(len > 0.0)) return false;  // no normal to compare with (a critical point of f)
+    return side_ * glm::dot(face_normal(pa, pb, pc), g) < std::cos(kMaxNormalDeviation) * len;
+  }
+
  private:
   const ImplicitField& field_;
+  double side_;
 };
 
 // Faces across each edge k (corners k, k + 1) of a validated base mesh; kInvalid on the border. Throws on
@@ -582,6 +620,70 @@ std::vector<std::array<FaceId, 3>> face_neighbours(const TriMesh& mesh, const st
                          f);
   }
   return nbr;
+}
+
+// Vertices where the mesh is not a manifold: an edge used twice in one direction (or by more than two faces),
+// two faces on one vertex triple, or faces around a vertex that form more than one fan (faces joined across
+// the edges at the vertex; the surface is pinched there). O(faces).
+std::vector<Index> non_manifold_vertices(const TriMesh& mesh) {
+  const std::size_t nc = mesh.indices.size();
+  const auto next = [](std::size_t c) { return c - c % 3 + (c % 3 + 1) % 3; };
+  std::vector<Index> out;
+  std::unordered_map<std::uint64_t, std::size_t> corner_of_edge;  // directed edge (a, b) -> the corner at a
+  std::vector<std::array<Index, 3>> triples(mesh.num_faces());
+  for (std::size_t c = 0; c < nc; ++c) {
+    const Index a = mesh.indices[c], b = mesh.indices[next(c)];
+    if (!corner_of_edge.emplace(directed_edge_key(a, b), c).second) out.insert(out.end(), {a, b});
+    triples[c / 3][c % 3] = a;
+  }
+  for (auto& t : triples) std::sort(t.begin(), t.end());
+  std::sort(triples.begin(), triples.end());
+  for (std::size_t f = 1; f < triples.size(); ++f)
+    if (triples[f] == triples[f - 1]) out.insert(out.end(), triples[f].begin(), triples[f].end());
+  std::vector<std::size_t> parent(nc);
+  for (std::size_t c = 0; c < nc; ++c) parent[c] = c;
+  auto find = [&](std::size_t c) {
+    while (parent[c] != c) c = parent[c] = parent[parent[c]];
+    return c;
+  };
+  for (std::size_t c = 0; c < nc; ++c) {
+    // Corner c at a with edge (a, b); the twin face has (b, a): its corner at b is `twin`, the one at a next(twin).
+    const Index a = mesh.indices[c], b = mesh.indices[next(c)];
+    const auto it = corner_of_edge.find(directed_edge_key(b, a));
+    if (it == corner_of_edge.end()) continue;
+    parent[find(c)] = find(next(it->second));
+  }
+  std::vector<Index> fans(mesh.positions.size(), 0);
+  for (std::size_t c = 0; c < nc; ++c)
+    if (find(c) == c) ++fans[mesh.indices[c]];
+  for (std::size_t v = 0; v < fans.size(); ++v)
+    if (fans[v] > 1) out.push_back(static_cast<Index>(v));
+  return out;
+}
+
+// Euler characteristic and number of connected components of the faces. O(faces).
+std::array<long, 2> topology(const TriMesh& mesh) {
+  std::vector<Index> parent(mesh.positions.size());
+  for (std::size_t v = 0; v < parent.size(); ++v) parent[v] = static_cast<Index>(v);
+  auto find = [&](Index v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  std::vector<std::uint8_t> used(mesh.positions.size(), 0);
+  std::unordered_map<std::uint64_t, std::uint8_t> edges;
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = mesh.corner(f, k), b = mesh.corner(f, (k + 1) % 3);
+      used[a] = 1;
+      edges.emplace(undirected_edge_key(a, b), 0);
+      parent[find(a)] = find(b);
+    }
+  long vertices = 0, components = 0;
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    vertices += used[v];
+    components += used[v] && find(static_cast<Index>(v)) == v;
+  }
+  return {vertices - static_cast<long>(edges.size()) + static_cast<long>(mesh.num_faces()), components};
 }
 
 // Edmonds' blossom algorithm (augmenting paths with odd cycles shrunk) on the dual graph, started from a
@@ -777,7 +879,16 @@ AdaptiveHierarchy implicit_from_base(const ImplicitSurface& surface, const TriMe
   }
   std::size_t unpaired = 0;
   const std::vector<std::uint8_t> marking = pair_and_mark(placed, nbr, unpaired);
-  ImplicitRefiner refiner(options, who, field);
+  // The side the base's normals face: a vote of the faces weighted by area (polygonize_freudenthal's face f > 0;
+  // a caller's base may face either way).
+  double vote = 0.0;
+  for (std::size_t f = 0; f < placed.num_faces(); ++f) {
+    const glm::dvec3 a(placed.positions[placed.corner(f, 0)]), b(placed.positions[placed.corner(f, 1)]),
+        c(placed.positions[placed.corner(f, 2)]);
+    const glm::dvec3 g = field.gradient((a + b + c) / 3.0);
+    if (const double len = glm::length(g); len > 0.0) vote += glm::dot(glm::cross(b - a, c - a), g) / len;
+  }
+  ImplicitRefiner refiner(options, who, field, vote < 0.0 ? -1.0 : 1.0);
   return refiner.build(placed, marking, unpaired);
 }
 
@@ -952,78 +1063,189 @@ TriMesh polygonize_freudenthal(const ImplicitSurface& surface) {
     gv = std::move(snapped);
   }
 
-  TriMesh mesh;
-  std::vector<glm::dvec3> exact;  // the vertices in double: the faces are oriented on these
-  std::unordered_map<std::uint64_t, Index> vertex_of;  // grid edge (a < b), or (a, a) for a grid vertex with f == 0
-  auto edge_vertex = [&](Index in, Index out) -> Index {
-    const bool at_vertex = gv[out] == 0.0;
-    const std::uint64_t key = at_vertex ? directed_edge_key(out, out) : undirected_edge_key(in, out);
-    const auto [it, inserted] = vertex_of.try_emplace(key, static_cast<Index>(mesh.positions.size()));
-    if (!inserted) return it->second;
-    glm::dvec3 p = gp[out];
-    if (!at_vertex) {
-      // Bisection on the grid edge: the root is on the surface to double precision.
-      glm::dvec3 a = gp[in], b = gp[out];
-      for (int it2 = 0; it2 < 64; ++it2) {
-        const glm::dvec3 m = 0.5 * (a + b);
-        const double fm = surface.value(m);
-        if (!std::isfinite(fm)) throw InvalidInput(who + ": f is not finite at " + point_text(m));
-        (fm < 0.0 ? a : b) = m;
-      }
-      p = 0.5 * (a + b);
+  // Roots on the edges of the Kuhn tetrahedra, from the inside end (f < 0) to the outside end, by bisection:
+  // on the surface to double precision.
+  std::unordered_map<std::uint64_t, glm::dvec3> root_of;
+  auto root = [&](Index in, Index out) {
+    if (const auto it = root_of.find(undirected_edge_key(in, out)); it != root_of.end()) return it->second;
+    glm::dvec3 a = gp[in], b = gp[out];
+    for (int it = 0; it < 64; ++it) {
+      const glm::dvec3 m = 0.5 * (a + b);
+      const double fm = surface.value(m);
+      if (!std::isfinite(fm)) throw InvalidInput(who + ": f is not finite at " + point_text(m));
+      (fm < 0.0 ? a : b) = m;
     }
-    mesh.positions.push_back(glm::vec3(p));
-    exact.push_back(p);
-    return it->second;
+    return root_of[undirected_edge_key(in, out)] = 0.5 * (a + b);
   };
-  auto emit = [&](std::array<Index, 3> t, const glm::dvec3& outward) {
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return;
-    const glm::dvec3 &a = exact[t[0]], &b = exact[t[1]], &c = exact[t[2]];
-    if (glm::dot(glm::cross(b - a, c - a), outward) < 0.0) std::swap(t[1], t[2]);
-    mesh.indices.insert(mesh.indices.end(), t.begin(), t.end());
+
+  // Snapping (Labelle-Shewchuk 2007, "Isosurface stuffing", section 3: a lattice vertex near a cutting point is
+  // moved onto it). A root close to a grid vertex makes faces with very short edges next to long ones (the
+  // 4 x 4 x 2 torus had faces of quality 0.004, edges of 0.008 next to edges of 1.5), and the bisection of such
+  // a needle folds across the surface once a long edge's midpoint is projected: the sagitta of a long chord
+  // exceeds the needle's width. So a grid vertex with a root closer than kSnapFraction of that edge's length
+  // moves onto its nearest such root, and the roots on all its crossing edges are welded into it, as for a grid
+  // vertex with f == 0; unlike a zero it keeps its side (inside or outside), so every tetrahedron keeps its sign
+  // pattern and the faces around the vertex collapse. When both ends of a crossing edge are welded, the edge's
+  // point is the outside end's. Faces are oriented on the unmoved grid points. A snap that turns a face against
+  // that orientation or makes a vertex or an edge non-manifold (the surface thinner than the grid) is undone;
+  // if a defect remains that no undo removes, or the topology (Euler characteristic, components) differs from
+  // the polygonization without snaps, or undoing takes more than kMaxSnapRounds rounds, no vertex is snapped.
+  constexpr std::array<std::array<std::size_t, 3>, 7> kKuhnEdges{
+      {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}}};
+  auto for_each_kuhn_edge = [&](auto&& fn) {
+    for (std::size_t k = 0; k <= nz; ++k)
+      for (std::size_t j = 0; j <= ny; ++j)
+        for (std::size_t i = 0; i <= nx; ++i)
+          for (const auto& d : kKuhnEdges) {
+            if (i + d[0] > nx || j + d[1] > ny || k + d[2] > nz) continue;
+            const auto a = static_cast<Index>(i + sx * (j + sy * k));
+            fn(a, static_cast<Index>(a + d[0] + sx * (d[1] + sy * d[2])));
+          }
   };
-  // Kuhn's 6 tetrahedra of a cell: paths from corner (0,0,0) to (1,1,1) along the axes in each order.
-  constexpr std::array<std::array<int, 3>, 6> kOrders{{{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
-  const std::array<std::size_t, 3> stride{1, sx, sx * sy};
-  for (std::size_t k = 0; k < nz; ++k)
-    for (std::size_t j = 0; j < ny; ++j)
-      for (std::size_t i = 0; i < nx; ++i)
-        for (const auto& order : kOrders) {
-          std::array<Index, 4> v;
-          v[0] = static_cast<Index>(i + sx * (j + sy * k));
-          for (int s = 0; s < 3; ++s) v[s + 1] = static_cast<Index>(v[s] + stride[order[s]]);
-          std::array<Index, 4> in{}, out{};
-          std::size_t ni = 0, no = 0;
-          for (const Index g : v) (gv[g] < 0.0 ? in[ni++] : out[no++]) = g;
-          if (ni == 0 || no == 0) continue;
-          // The linear interpolant grows from the inside corners to the outside ones.
-          glm::dvec3 cin(0.0), cout(0.0);
-          for (std::size_t q = 0; q < ni; ++q) cin += gp[in[q]] / double(ni);
-          for (std::size_t q = 0; q < no; ++q) cout += gp[out[q]] / double(no);
-          const glm::dvec3 outward = cout - cin;
-          if (ni == 1) {
-            emit({edge_vertex(in[0], out[0]), edge_vertex(in[0], out[1]), edge_vertex(in[0], out[2])}, outward);
-          } else if (ni == 3) {
-            emit({edge_vertex(in[0], out[0]), edge_vertex(in[1], out[0]), edge_vertex(in[2], out[0])}, outward);
-          } else {
-            // Quad (a-c, a-d, b-d, b-c) cut along its shorter diagonal.
-            const Index ac = edge_vertex(in[0], out[0]), ad = edge_vertex(in[0], out[1]),
-                        bd = edge_vertex(in[1], out[1]), bc = edge_vertex(in[1], out[0]);
-            const auto d2 = [&](Index p, Index q) {
-              const glm::vec3 e = mesh.positions[p] - mesh.positions[q];
-              return glm::dot(e, e);
-            };
-            if (d2(ac, bd) <= d2(ad, bc)) {
-              emit({ac, ad, bd}, outward);
-              emit({ac, bd, bc}, outward);
+  // Welded at the grid vertex: f == 0 there (outside), or snapped (its own side), at position weld_at.
+  std::vector<std::uint8_t> welded(gp.size(), 0);
+  for (std::size_t v = 0; v < gp.size(); ++v) welded[v] = gv[v] == 0.0 ? 1 : 0;
+  std::vector<glm::dvec3> weld_at = gp;
+
+  struct Polygonization {
+    TriMesh mesh;
+    std::vector<glm::dvec3> exact;  // welded vertices at their grid points: the faces are oriented on these
+    std::vector<Index> grid_of;     // per vertex: its grid vertex if welded there, else kInvalid
+  };
+  auto polygonize = [&]() {
+    Polygonization out;
+    TriMesh& mesh = out.mesh;
+    std::unordered_map<std::uint64_t, Index> vertex_of;  // grid edge (a < b), or (a, a) for a welded grid vertex
+    auto edge_vertex = [&](Index in, Index outside) -> Index {
+      const Index at = welded[outside] ? outside : welded[in] ? in : kInvalid;
+      const std::uint64_t key = at != kInvalid ? directed_edge_key(at, at) : undirected_edge_key(in, outside);
+      const auto [it, inserted] = vertex_of.try_emplace(key, static_cast<Index>(mesh.positions.size()));
+      if (!inserted) return it->second;
+      const glm::dvec3 p = at != kInvalid ? weld_at[at] : root(in, outside);
+      mesh.positions.push_back(glm::vec3(p));
+      out.exact.push_back(at != kInvalid ? gp[at] : p);
+      out.grid_of.push_back(at);
+      return it->second;
+    };
+    auto emit = [&](std::array<Index, 3> t, const glm::dvec3& outward) {
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return;
+      const glm::dvec3 &a = out.exact[t[0]], &b = out.exact[t[1]], &c = out.exact[t[2]];
+      if (glm::dot(glm::cross(b - a, c - a), outward) < 0.0) std::swap(t[1], t[2]);
+      mesh.indices.insert(mesh.indices.end(), t.begin(), t.end());
+    };
+    // Kuhn's 6 tetrahedra of a cell: paths from corner (0,0,0) to (1,1,1) along the axes in each order.
+    constexpr std::array<std::array<int, 3>, 6> kOrders{
+        {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+    const std::array<std::size_t, 3> stride{1, sx, sx * sy};
+    for (std::size_t k = 0; k < nz; ++k)
+      for (std::size_t j = 0; j < ny; ++j)
+        for (std::size_t i = 0; i < nx; ++i)
+          for (const auto& order : kOrders) {
+            std::array<Index, 4> v;
+            v[0] = static_cast<Index>(i + sx * (j + sy * k));
+            for (int s = 0; s < 3; ++s) v[s + 1] = static_cast<Index>(v[s] + stride[order[s]]);
+            std::array<Index, 4> in{}, ou{};
+            std::size_t ni = 0, no = 0;
+            for (const Index g : v) (gv[g] < 0.0 ? in[ni++] : ou[no++]) = g;
+            if (ni == 0 || no == 0) continue;
+            // The linear interpolant grows from the inside corners to the outside ones.
+            glm::dvec3 cin(0.0), cout(0.0);
+            for (std::size_t q = 0; q < ni; ++q) cin += gp[in[q]] / double(ni);
+            for (std::size_t q = 0; q < no; ++q) cout += gp[ou[q]] / double(no);
+            const glm::dvec3 outward = cout - cin;
+            if (ni == 1) {
+              emit({edge_vertex(in[0], ou[0]), edge_vertex(in[0], ou[1]), edge_vertex(in[0], ou[2])}, outward);
+            } else if (ni == 3) {
+              emit({edge_vertex(in[0], ou[0]), edge_vertex(in[1], ou[0]), edge_vertex(in[2], ou[0])}, outward);
             } else {
-              emit({ad, bd, bc}, outward);
-              emit({ad, bc, ac}, outward);
+              // Quad (a-c, a-d, b-d, b-c) cut along its shorter diagonal (a welded corner makes it a triangle).
+              const Index ac = edge_vertex(in[0], ou[0]), ad = edge_vertex(in[0], ou[1]),
+                          bd = edge_vertex(in[1], ou[1]), bc = edge_vertex(in[1], ou[0]);
+              const auto d2 = [&](Index p, Index q) {
+                const glm::vec3 e = mesh.positions[p] - mesh.positions[q];
+                return glm::dot(e, e);
+              };
+              if (d2(ac, bd) <= d2(ad, bc)) {
+                emit({ac, ad, bd}, outward);
+                emit({ac, bd, bc}, outward);
+              } else {
+                emit({ad, bd, bc}, outward);
+                emit({ad, bc, ac}, outward);
+              }
             }
           }
+    return out;
+  };
+
+  Polygonization plain = polygonize();
+  std::vector<std::tuple<double, Index, glm::dvec3>> candidates;  // (distance, grid vertex, root)
+  for_each_kuhn_edge([&](Index a, Index b) {
+    if (gv[a] == 0.0 || gv[b] == 0.0 || (gv[a] < 0.0) == (gv[b] < 0.0)) return;
+    const glm::dvec3 p = gv[a] < 0.0 ? root(a, b) : root(b, a);
+    const double len = glm::length(gp[b] - gp[a]);
+    for (const Index e : {a, b})
+      if (const double dist = glm::length(p - gp[e]); dist < kSnapFraction * len) candidates.emplace_back(dist, e, p);
+  });
+  std::sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
+    return std::tie(std::get<0>(x), std::get<1>(x)) < std::tie(std::get<0>(y), std::get<1>(y));
+  });
+  // A vertex between two sheets (inside a tube thinner than the grid, or in a gap between two parts) has roots on
+  // both, with opposite normals: welding them would bridge the sheets, so it is not snapped.
+  const ImplicitField field(surface, glm::length(surface.box_hi - surface.box_lo), who);
+  auto one_sheet = [&](Index v, const glm::dvec3& target) {
+    const glm::dvec3 g = field.gradient(target);
+    const std::array<std::size_t, 3> at{v % sx, v / sx % sy, v / (sx * sy)}, last{nx, ny, nz};
+    for (const auto& d : kKuhnEdges)
+      for (const bool forward : {true, false}) {
+        // The grid vertex at -d or +d from v, if it is inside the grid.
+        std::size_t w = 0;
+        for (int axis = 2; axis >= 0; --axis) {
+          const std::size_t n = axis == 0 ? 1 : axis == 1 ? sx : sx * sy;
+          if (forward ? at[axis] + d[axis] > last[axis] : at[axis] < d[axis]) {
+            w = std::numeric_limits<std::size_t>::max();
+            break;
+          }
+          w += n * (forward ? at[axis] + d[axis] : at[axis] - d[axis]);
         }
-  face_neighbours(mesh, who);  // manifold and consistently oriented, or a named error
-  return mesh;
+        if (w == std::numeric_limits<std::size_t>::max() || (gv[v] < 0.0) == (gv[w] < 0.0)) continue;
+        const auto u = static_cast<Index>(w);
+        if (glm::dot(field.gradient(gv[v] < 0.0 ? root(v, u) : root(u, v)), g) <= 0.0) return false;
+      }
+    return true;
+  };
+  std::vector<std::uint8_t> snapped(gp.size(), 0);
+  for (const auto& [dist, v, p] : candidates) {
+    if (welded[v] || !one_sheet(v, p)) continue;
+    welded[v] = snapped[v] = 1;
+    weld_at[v] = p;
+  }
+  constexpr int kMaxSnapRounds = 8;
+  auto any_snapped = [&] { return std::find(snapped.begin(), snapped.end(), std::uint8_t{1}) != snapped.end(); };
+  for (int round = 0; round < kMaxSnapRounds && any_snapped(); ++round) {
+    Polygonization snap = polygonize();
+    std::vector<Index> undo = non_manifold_vertices(snap.mesh);
+    for (std::size_t f = 0; f < snap.mesh.num_faces(); ++f) {
+      const std::array<Index, 3> t{snap.mesh.corner(f, 0), snap.mesh.corner(f, 1), snap.mesh.corner(f, 2)};
+      const auto& p = snap.mesh.positions;
+      const glm::dvec3 reference = glm::cross(snap.exact[t[1]] - snap.exact[t[0]], snap.exact[t[2]] - snap.exact[t[0]]);
+      const glm::dvec3 moved = glm::cross(glm::dvec3(p[t[1]] - p[t[0]]), glm::dvec3(p[t[2]] - p[t[0]]));
+      if (!(glm::dot(reference, moved) > 0.0)) undo.insert(undo.end(), t.begin(), t.end());
+    }
+    bool changed = false;
+    for (const Index v : undo)
+      if (const Index g = snap.grid_of[v]; g != kInvalid && snapped[g]) {
+        snapped[g] = welded[g] = 0;
+        weld_at[g] = gp[g];
+        changed = true;
+      }
+    if (changed) continue;
+    if (!undo.empty()) break;  // a defect no snap of its own vertices caused
+    if (topology(snap.mesh) != topology(plain.mesh)) break;
+    face_neighbours(snap.mesh, who);  // manifold and consistently oriented, or a named error
+    return std::move(snap.mesh);
+  }
+  face_neighbours(plain.mesh, who);
+  return std::move(plain.mesh);
 }
 
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const AdaptiveOptions& options) {

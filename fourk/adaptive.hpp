@@ -23,7 +23,9 @@
 ///   geometry closes up with no crack.
 /// - Implicit surfaces: the zero set of f polygonized on a Coxeter-Freudenthal (Kuhn) decomposition of a grid
 ///   (6 tetrahedra per cell around the main diagonal; marching tetrahedra with roots on grid edges found by
-///   bisection, so base vertices lie on the surface), or a caller's base mesh whose vertices are projected.
+///   bisection, so base vertices lie on the surface; a grid vertex within 0.2 of an edge's length of a root is
+///   snapped onto it, so that roots next to a grid vertex make no needle faces), or a caller's base mesh whose
+///   vertices are projected.
 ///   The faces are paired across shared edges by a maximum matching of the dual graph (greedy on the longest
 ///   edges, then Edmonds augmenting paths) and a pair marks its shared edge. A face left unpaired marks its
 ///   longest border edge if it has one (a 1 -> 2 split), otherwise its longest edge, whose neighbour is
@@ -43,15 +45,26 @@
 /// - Implicit surfaces: max over b in S_k of the distance from the triangle point sum b_i P_i to the point
 ///   that Newton steps along the gradient reach on the surface (an upper bound of the distance to the
 ///   surface; when Newton fails, a sign change along the face normal is searched; when both fail, the point
-///   counts as out of tolerance).
+///   counts as out of tolerance). Distances cannot see a fold (a face standing across the surface, in the
+///   plane of a meridian of the torus, keeps its points near it), so a face is also split, whatever its error,
+///   when its normal is more than 60 degrees from the gradient of f at its centroid and its longest edge is
+///   longer than the tolerance (the fold guard; AdaptiveHierarchy::num_folded_faces counts these faces). Such
+///   folds come from bisecting a long chord whose sagitta exceeds the face's width and go away as faces
+///   shrink; the edge bound keeps the refinement finite where they do not (a base that does not resolve the
+///   surface, whose faces are turned over in its tangent plane). 60 degrees lies between the deviation of a
+///   coarse but sound face (the torus's base faces that span a third of its tube reach 43) and a face seen from
+///   behind (90). The error of a face split by the guard alone stays its distance error.
 /// An MT node's error is the largest error of its pre-image faces (MtBuilder then saturates it). So
 /// extract() with Criterion::object_error(e), e >= tolerance, gives a mesh whose faces all have error <= e,
-/// and every face of the finest front has error <= tolerance. Between sample points nothing is guaranteed.
+/// and every face of the finest front has error <= tolerance (implicit surfaces: and, when its longest edge is
+/// longer than the tolerance, a normal within 60 degrees of the gradient). Between sample points nothing is
+/// guaranteed.
 ///
 /// Figure 20 counts (tests/fourk/adaptive_test.cpp, default sample_order 4): torus_parametric() at tolerance
 /// 0.0685 gives 528 finest triangles (the paper shows 516; the count jumps 464 -> 528 between 0.069 and
-/// 0.068 because the torus is refined ring by ring); torus_implicit() at 0.046 gives 1320 (paper: 1324) from
-/// a 184-face base. The paper does not state its tolerances, so these were chosen to match the counts.
+/// 0.068 because the torus is refined ring by ring); torus_implicit() at 0.041 gives 1322 (paper: 1324) from
+/// a 144-face base (at 0.046, the tolerance chosen before grid vertices were snapped, 1088). The paper does not
+/// state its tolerances, so these were chosen to match the counts.
 ///
 /// Result invariants (AdaptiveHierarchy): mt passes Mt::validate(); every node except the source is a
 /// kSplit (on a periodic seam its two pre-image faces share no vertex id: they are the two sides of the
@@ -143,6 +156,7 @@ struct AdaptiveHierarchy {
   std::size_t num_base_faces = 0;
   std::size_t num_finest_faces = 0;       ///< faces of the drain (the finest front)
   std::size_t num_unpaired_base_faces = 0;  ///< implicit: base faces the matching left unpaired
+  std::size_t num_folded_faces = 0;       ///< implicit: faces split by the fold guard alone (error in tolerance)
   int max_level = 0;                      ///< deepest face level reached
 };
 
@@ -166,22 +180,29 @@ AdaptiveHierarchy build_adaptive_cylindrical(const CylindricalScan& scan, const 
 
 /// The base mesh of an implicit surface: marching tetrahedra on the Coxeter-Freudenthal decomposition of the
 /// grid (see the header comment), faces oriented with normals towards f > 0, vertices on the surface to
-/// double precision (stored as float). Degenerate faces (from welded zero-valued grid vertices) are dropped.
+/// double precision (stored as float). A grid vertex with a root on one of its tetrahedron edges closer than
+/// 0.2 of that edge's length is moved onto the nearest such root and the roots of its crossing edges welded
+/// into it (isosurface stuffing's snapping); a snap that would turn a face over, make the mesh non-manifold
+/// or weld roots with opposite normals is not made, and if the topology would change no vertex is snapped.
+/// Degenerate faces (from welded grid vertices) are dropped.
 /// Throws InvalidInput: missing value; box not finite or box_lo >= box_hi; cells outside [1, 256] or more
 /// than 2^21 cells in all; f not finite at a grid vertex (named by (i, j, k) and its point); the result not
 /// an edge-manifold consistently oriented mesh (named by the edge). Cost: O(cells) evaluations of f plus 64
-/// per root.
+/// per root and a gradient per root around each grid vertex near a root; the tetrahedra are marched 1 to 9
+/// times (once without snaps, then until no snap is undone).
 TriMesh polygonize_freudenthal(const ImplicitSurface& surface);
 
 /// Adaptive refinement of an implicit surface from polygonize_freudenthal(surface). New vertices are edge
-/// midpoints projected onto the surface (Newton steps along the gradient). Throws InvalidInput: as
+/// midpoints projected onto the surface (Newton steps along the gradient). Faces are split while their error
+/// exceeds the tolerance or the fold guard holds (see the header comment). Throws InvalidInput: as
 /// polygonize_freudenthal; an empty polygonization; bad options; f or its gradient not finite at a point
 /// the builder visits (named); a midpoint that cannot be projected; tolerance not met at max_level or more
 /// than max_faces faces. Cost: O(F k^2) projections (each a few evaluations of f and its gradient).
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const AdaptiveOptions& options);
 
 /// As above from a caller's base mesh (e.g. a coarse sphere); its vertices are projected onto the surface
-/// first, and its marking comes from the matching. Throws InvalidInput also when base.validate() fails, the
+/// first, and its marking comes from the matching. The base may face either way: the fold guard compares
+/// normals with the side most of its area faces. Throws InvalidInput also when base.validate() fails, the
 /// base is empty, has a degenerate face (repeated corner), an edge used twice in one direction (non-manifold
 /// or inconsistently oriented; named by face), or a vertex that cannot be projected.
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const TriMesh& base,
