@@ -434,7 +434,7 @@ int run_build(const BuildArgs& a) {
       MtFront fine(h.mt);
       for (NodeId n = 1; n < h.mt.num_nodes(); ++n) fine.refine(n);
       const TriMesh mesh = fine.to_mesh();
-      add_level_picture(pictures, "adaptive_surface.png", mesh, default_camera_for(mesh, 4.0f / 3.0f));
+      add_level_picture(pictures, "adaptive_surface.png", mesh, chosen_camera(mesh, a.up, a.view));
       if (!h.domain.empty()) {
         const TriMesh dom = adaptive_domain_mesh(h);
         Camera top = default_camera_for(dom, 4.0f / 3.0f);

@@ -1186,6 +1186,7 @@ TriMesh Grid48Front::extract_mesh(const Query& q, std::vector<Index>* lattice_id
 }
 
 QueryStats Grid48Front::extract_fast(const Query& q) {
+  q.validate();  // as extract() does: a broken focus set is refused before the front changes
   // The descent marks diamonds in place (1 wanted, 2 evaluated and not), calling the criterion as it
   // goes: if that throws, the marks and counters describe no front, so the front goes back to the base.
   try {

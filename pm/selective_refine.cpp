@@ -210,6 +210,9 @@ std::vector<Index> top_fraction_features(std::span<const float> magnitude, doubl
   if (!(fraction > 0.0 && fraction <= 1.0)) throw InvalidInput("top_fraction_features: fraction must be in (0, 1]");
   std::vector<Index> out;
   if (magnitude.empty()) return out;
+  for (std::size_t i = 0; i < magnitude.size(); ++i)
+    if (std::isnan(magnitude[i]))  // nth_element needs an order: a NaN left the threshold undefined
+      throw InvalidInput("top_fraction_features: magnitude " + std::to_string(i) + " is NaN");
   std::vector<float> sorted(magnitude.begin(), magnitude.end());
   const auto k = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(sorted.size())));
   const std::size_t kth = std::clamp<std::size_t>(k, 1, sorted.size()) - 1;

@@ -73,7 +73,8 @@ std::vector<float> sobel_magnitude(const Image& image);
 
 /// Feature pixels (indices y * width + x, increasing) in the top `fraction` of the non-zero magnitudes: the
 /// threshold is the ceil(fraction * pixels)-th largest magnitude and every pixel at or above it (and above
-/// zero) is kept, so ties may add a few. Throws InvalidInput when fraction is not in (0, 1].
+/// zero) is kept, so ties may add a few. Throws InvalidInput when fraction is not in (0, 1] or a magnitude
+/// is NaN (naming its index).
 std::vector<Index> top_fraction_features(std::span<const float> magnitude, double fraction);
 
 /// A regular mesh with one vertex per pixel (Kim-Lee section 5, the "2D regular mesh"): pixel (x, y) at

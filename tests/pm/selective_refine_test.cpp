@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "multitri/camera.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/query.hpp"
@@ -130,6 +132,9 @@ TEST(SelectiveRefine, SobelFindsAStepEdge) {
   for (Index f : feat) EXPECT_TRUE(f % 16 == 7 || f % 16 == 8);
   EXPECT_TRUE(top_fraction_features(sobel_magnitude(gray_image(4, 4, std::vector<std::uint8_t>(16, 90))), 1.0).empty());
   EXPECT_THROW(top_fraction_features(mag, 0.0), InvalidInput);
+  // A NaN magnitude left the threshold undefined (0 features for {1, NaN, 3, NaN, 2} at 0.5): refused.
+  const std::vector<float> with_nan = {1.0f, std::numeric_limits<float>::quiet_NaN(), 3.0f, 2.0f};
+  EXPECT_THROW(top_fraction_features(with_nan, 0.5), InvalidInput);
   EXPECT_THROW(top_fraction_features(mag, 1.5), InvalidInput);
   EXPECT_THROW(sobel_magnitude(Image{}), InvalidInput);
 }
