@@ -17,6 +17,11 @@
 #include "multitri/tri_mesh.hpp"
 #include "pm/qem_analysis.hpp"
 
+namespace CLI {
+class App;
+class Option;
+}  // namespace CLI
+
 namespace varmesh::app {
 
 /// Parses comma-separated numbers; throws InvalidInput naming the option on a bad list or count.
@@ -78,6 +83,10 @@ HeightField read_checked_heightfield(const std::string& path, const HeightFieldR
 void check_output_file(const std::string& path);
 void refuse_same_file(const std::string& input, const std::string& input_what, const std::string& output,
                       const std::string& output_what);
+/// --pixels and --viewport of a command with --camera (screen-space error in pixels, viewport height),
+/// both needing `camera`, with option texts (CLI11's "FLOAT Needs: --camera" ran into the descriptions).
+void add_screen_error_options(CLI::App& sub, float& pixels, float& viewport, CLI::Option* camera);
+
 /// InvalidInput when two outputs of one command are the same file (symbolic links followed, as the writers
 /// do; hard links by std::filesystem::equivalent): the second would replace the first. Names both options.
 void refuse_same_output(const std::string& first, const std::string& first_what, const std::string& second,

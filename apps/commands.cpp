@@ -268,6 +268,17 @@ bool same_file(const std::string& x, const std::string& y) {
 
 }  // namespace
 
+void add_screen_error_options(CLI::App& sub, float& pixels, float& viewport, CLI::Option* camera) {
+  sub.add_option("--pixels", pixels, "with --camera: screen-space error in pixels (default 1)")
+      ->option_text("PIXELS")
+      ->check(check_positive)
+      ->needs(camera);
+  sub.add_option("--viewport", viewport, "with --camera: viewport height in pixels (default 1080)")
+      ->option_text("PIXELS")
+      ->check(check_positive)
+      ->needs(camera);
+}
+
 void refuse_same_output(const std::string& first, const std::string& first_what, const std::string& second,
                         const std::string& second_what) {
   if (first.empty() || second.empty()) return;
@@ -719,8 +730,7 @@ int run(int argc, char** argv) {
   terrain->add_option("-o,--output", ta.output, "output mesh (.obj, .ply, .off)")->required();
   terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample")->check(check_non_negative);
   auto* terrain_camera = terrain->add_option("--camera", ta.camera, "view-dependent: ex,ey,ez,tx,ty,tz,fov_degrees (world units: x = column * spacing)")->check(check_not_empty);
-  terrain->add_option("--pixels", ta.pixels, "with --camera: screen-space error in pixels (default 1)")->check(check_positive)->needs(terrain_camera);
-  terrain->add_option("--viewport", ta.viewport, "with --camera: viewport height in pixels (default 1080)")->check(check_positive)->needs(terrain_camera);
+  add_screen_error_options(*terrain, ta.pixels, ta.viewport, terrain_camera);
   terrain->add_option("--budget", ta.budget, "triangle budget (priority-driven, largest error first)")->check(check_count);
   terrain->add_option("--z-scale", ta.z_scale, "multiply heights by this factor");
   terrain->add_option("--spacing", ta.spacing, "distance between samples (default 1)");

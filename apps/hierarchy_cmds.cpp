@@ -76,15 +76,7 @@ void add_view_query_options(CLI::App& sub, ViewQueryArgs& a, const char* hierarc
   sub.add_option("--error", a.error, "largest node error allowed (object units)")->check(check_non_negative);
   auto* camera = sub.add_option("--camera", a.camera, "ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error")
                      ->check(check_not_empty);
-  // Option texts instead of CLI11's "FLOAT Needs: --camera", which ran into the descriptions.
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")
-      ->option_text("PIXELS")
-      ->check(check_positive)
-      ->needs(camera);
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")
-      ->option_text("PIXELS")
-      ->check(check_positive)
-      ->needs(camera);
+  add_screen_error_options(sub, a.pixels, a.viewport, camera);
   sub.add_option("--budget", a.budget, "triangle budget")->check(check_count);
   auto* png = sub.add_option("--png", a.png, "also render the result to this PNG")->check(check_file_name);
   sub.add_option("--up", a.up, "with --png: x,y,z up axis (default 0,0,1)")->option_text("X,Y,Z")->check(check_not_empty)->needs(png);

@@ -498,15 +498,7 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
       ->check(check_non_negative);
   auto* camera = sub.add_option("--camera", a.camera, "with --adaptive: ex,ey,ez,tx,ty,tz,fov_degrees: frustum + back faces + screen-space error")
                      ->check(check_not_empty);
-  // Option texts instead of CLI11's "FLOAT Needs: --camera", which ran into the descriptions.
-  sub.add_option("--pixels", a.pixels, "with --camera: screen-space error in pixels (default 1)")
-      ->option_text("PIXELS")
-      ->check(check_positive)
-      ->needs(camera);
-  sub.add_option("--viewport", a.viewport, "with --camera: viewport height in pixels (default 1080)")
-      ->option_text("PIXELS")
-      ->check(check_positive)
-      ->needs(camera);
+  add_screen_error_options(sub, a.pixels, a.viewport, camera);
   sub.add_option("--png", a.png, "also render the result to this PNG (flat shading, polygon edges)")->check(check_file_name);
   sub.add_option("--figure", a.figure,
                  "write every scheme on INPUT into this folder (one PNG each, same camera, plus a grid): "
