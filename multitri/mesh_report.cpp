@@ -172,6 +172,7 @@ MeshReport analyze_mesh(const TriMesh& mesh) {
       // Duplicates: each face is looked at on the edge joining its two smallest vertices (its third vertex is
       // larger than u there), where copies of it show up as equal third vertices.
       if (run == 2) {
+        report.orientation_inconsistent_edges += idx[h0] == idx[low(items[i + 1])];
         const Index w = third_vertex(idx, h0);
         if (w > u && w == third_vertex(idx, low(items[i + 1]))) ++report.duplicate_faces;
       } else if (run > 2) {
@@ -207,6 +208,21 @@ MeshReport analyze_mesh(const TriMesh& mesh) {
   for (Index v = 0; v < static_cast<Index>(nv); ++v)
     if ((flags[v] & kUsed) && verts.is_root(v)) ++report.components;
 
+  // Coincident positions: vertex ids sorted by position (exact comparison; -0 and +0 are the same place).
+  {
+    std::vector<Index> order(nv);
+    for (Index v = 0; v < static_cast<Index>(nv); ++v) order[v] = v;
+    const auto& pos = mesh.positions;
+    auto less = [&](Index x, Index y) {
+      const glm::vec3 &p = pos[x], &q = pos[y];
+      if (p.x != q.x) return p.x < q.x;
+      if (p.y != q.y) return p.y < q.y;
+      return p.z < q.z;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (std::size_t i = 1; i < order.size(); ++i) report.coincident_vertices += !less(order[i - 1], order[i]);
+  }
+
   report.euler_characteristic = static_cast<long long>(num_used) - static_cast<long long>(report.edges) +
                                 static_cast<long long>(num_kept);
   report.closed = num_kept > 0 && report.boundary_edges == 0 && report.non_manifold_edges == 0;
@@ -224,10 +240,11 @@ std::string format_report(const MeshReport& r) {
   };
   auto num = [](std::size_t n) { return std::to_string(n); };
 
-  add("vertices", num(r.vertices) + " (" + num(r.unreferenced_vertices) + " unreferenced)");
+  add("vertices", num(r.vertices) + " (" + num(r.unreferenced_vertices) + " unreferenced, " + num(r.coincident_vertices) +
+                      " at the position of another)");
   add("faces", num(r.faces) + " (" + num(r.degenerate_faces) + " degenerate, " + num(r.zero_area_faces) +
                    " zero-area, " + num(r.duplicate_faces) + " duplicate)");
-  add("edges", num(r.edges));
+  add("edges", num(r.edges) + " (" + num(r.orientation_inconsistent_edges) + " where its two faces disagree on orientation)");
   add("boundary", num(r.boundary_edges) + " edges in " + num(r.boundary_loops) + " loops");
   add("non-manifold", num(r.non_manifold_edges) + " edges, " + num(r.non_manifold_vertices) + " vertices");
   add("components", num(r.components));

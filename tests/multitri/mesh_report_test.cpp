@@ -7,6 +7,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -63,7 +64,7 @@ TriMesh torus(Index n, Index m) {
 // and sets, per-vertex union-find), used as the slow reference for randomised soups.
 struct NaiveReport {
   std::size_t unref = 0, degenerate = 0, dup = 0, edges = 0, boundary = 0, loops = 0, nm_edges = 0, nm_verts = 0,
-              components = 0, zero_area = 0;
+              components = 0, zero_area = 0, inconsistent = 0, coincident = 0;
   long long chi = 0;
 };
 
@@ -107,17 +108,19 @@ NaiveReport naive_report(const TriMesh& m) {
     sorted_faces.insert(t);
   }
   r.dup = faces.size() - sorted_faces.size();
-  std::map<std::pair<Index, Index>, int> edge_faces;
+  std::map<std::pair<Index, Index>, int> edge_faces, directed;
   std::set<Index> used;
   for (const auto& t : faces)
     for (int k = 0; k < 3; ++k) {
       const Index a = t[static_cast<std::size_t>(k)], b = t[static_cast<std::size_t>((k + 1) % 3)];
       used.insert(a);
       ++edge_faces[{std::min(a, b), std::max(a, b)}];
+      ++directed[{a, b}];
     }
   r.edges = edge_faces.size();
   MapSets loops;
   for (const auto& [e, c] : edge_faces) {
+    if (c == 2 && (directed[{e.first, e.second}] != 1 || directed[{e.second, e.first}] != 1)) ++r.inconsistent;
     if (c == 1) {
       ++r.boundary;
       loops.unite(e.first, e.second);
@@ -126,6 +129,9 @@ NaiveReport naive_report(const TriMesh& m) {
   }
   r.loops = loops.count();
   r.unref = m.num_vertices() - used.size();
+  std::set<std::tuple<float, float, float>> places;
+  for (const glm::vec3& p : m.positions) places.insert({p.x, p.y, p.z});
+  r.coincident = m.num_vertices() - places.size();
   MapSets comps;
   for (const auto& t : faces) {
     comps.unite(t[0], t[1]);
@@ -167,6 +173,8 @@ void expect_matches_naive(const TriMesh& m) {
   EXPECT_EQ(r.components, n.components);
   EXPECT_EQ(r.euler_characteristic, n.chi);
   EXPECT_EQ(r.zero_area_faces, n.zero_area);
+  EXPECT_EQ(r.orientation_inconsistent_edges, n.inconsistent);
+  EXPECT_EQ(r.coincident_vertices, n.coincident);
 }
 
 TEST(MeshReportFixtures, EmptyMeshIsAllZeros) {
@@ -385,11 +393,35 @@ TEST(MeshReportFixtures, FormatMentionsTheCounts) {
   TriMesh t = tetrahedron();
   t.positions.push_back({9, 9, 9});
   const std::string s = format_report(analyze_mesh(t));
-  EXPECT_NE(s.find("vertices      5 (1 unreferenced)"), std::string::npos) << s;
+  EXPECT_NE(s.find("vertices      5 (1 unreferenced, 0 at the position of another)"), std::string::npos) << s;
   EXPECT_NE(s.find("faces         4"), std::string::npos) << s;
   EXPECT_NE(s.find("boundary      0 edges in 0 loops"), std::string::npos) << s;
   EXPECT_NE(s.find("genus         0"), std::string::npos) << s;
   EXPECT_NE(s.find("[0, 0, 0] .. [9, 9, 9]"), std::string::npos) << s;
+}
+
+TEST(MeshReportFixtures, FlippedFaceMakesItsThreeEdgesInconsistent) {
+  TriMesh t = tetrahedron();
+  EXPECT_EQ(analyze_mesh(t).orientation_inconsistent_edges, 0u);
+  std::swap(t.indices[1], t.indices[2]);  // face 0 turned round: each of its edges now runs one way twice
+  const MeshReport r = analyze_mesh(t);
+  EXPECT_EQ(r.orientation_inconsistent_edges, 3u);
+  EXPECT_TRUE(r.closed);
+  EXPECT_NE(format_report(r).find("3 where its two faces disagree on orientation"), std::string::npos) << format_report(r);
+}
+
+TEST(MeshReportFixtures, CoincidentVerticesCountCopiesNotFirsts) {
+  TriMesh t = tetrahedron();
+  const std::size_t n = t.num_vertices();
+  t.positions.push_back(t.positions[0]);  // one copy of vertex 0, unreferenced
+  t.positions.push_back(t.positions[0]);  // and another
+  t.positions.push_back(t.positions[2]);
+  t.positions.push_back({-0.0f, 7.0f, 7.0f});
+  t.positions.push_back({0.0f, 7.0f, 7.0f});  // -0 and +0 are one place
+  const MeshReport r = analyze_mesh(t);
+  EXPECT_EQ(r.vertices, n + 5);
+  EXPECT_EQ(r.coincident_vertices, 4u);
+  EXPECT_NE(format_report(r).find("4 at the position of another"), std::string::npos) << format_report(r);
 }
 
 TEST(MeshReportExact, Collinearity) {
@@ -471,6 +503,22 @@ void check_against_manifest(const std::string& path, const Expected& e) {
   // chi = V_used - E + F_nondegenerate gives the edge count the manifest implies.
   EXPECT_EQ(static_cast<long long>(r.edges),
             static_cast<long long>(e.v - e.unref) + static_cast<long long>(e.f - e.degenerate) - e.chi);
+}
+
+// The manifest's coincident-position and orientation counts (its notes line); every file of it has 0
+// orientation-inconsistent edges.
+TEST(MeshReportManifest, CoincidentPositionsAndOrientation) {
+  const std::pair<const char*, std::size_t> files[] = {
+      {"meshes/cow_cgal_2904v.off", 1},          {"meshes/beetle_boundary_19887v.off", 2},
+      {"meshes/elephant-with-holes_2798v.off", 65}, {"meshes/dragon_vrip_res3_22998v.ply", 0},
+      {"meshes/bun_zipper_35947v.obj", 0},       {"meshes/dragon_vrip_437645v_binary_le.ply", 2100}};
+  for (const auto& [file, coincident] : files) {
+    VARMESH_REQUIRE_SHARED(path, file);
+    SCOPED_TRACE(path);
+    const MeshReport r = analyze_mesh(read_mesh(path));
+    EXPECT_EQ(r.coincident_vertices, coincident);
+    EXPECT_EQ(r.orientation_inconsistent_edges, 0u);
+  }
 }
 
 #define VARMESH_MANIFEST_TEST(name, ...)              \
