@@ -8,7 +8,8 @@
 #include <cstring>
 #include <string>
 #include <string_view>
-#include <vector>
+#include <type_traits>
+#include <utility>
 
 #include "multitri/errors.hpp"
 
@@ -24,6 +25,14 @@ inline std::uint64_t fnv1a64(const void* data, std::size_t n, std::uint64_t h = 
   return h;
 }
 
+/// The little-endian unsigned integer of sizeof(T) bytes at `p` (the caller checked that they exist).
+template <class T> T load_le(const char* p) noexcept {
+  static_assert(std::is_integral_v<T> && std::is_unsigned_v<T>);
+  std::uint64_t v = 0;
+  for (std::size_t i = 0; i < sizeof(T); ++i) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(p[i])) << (8 * i);
+  return static_cast<T>(v);
+}
+
 class Writer {
  public:
   void bytes(const void* p, std::size_t n) { buf_.append(static_cast<const char*>(p), n); }
@@ -36,29 +45,35 @@ class Writer {
   /// Room for `n` more bytes (saves the reallocations of a large file).
   void reserve(std::size_t n) { buf_.reserve(buf_.size() + n); }
   void f32(float v) { le(std::bit_cast<std::uint32_t>(v)); }
-  /// Appends the checksum of everything written so far.
-  void finish_with_checksum() { le(fnv1a64(buf_.data(), buf_.size())); }
+  /// Appends the checksum (u64) of everything written so far.
+  void append_checksum() { le(fnv1a64(buf_.data(), buf_.size())); }
   std::string& str() { return buf_; }
 
  private:
   std::string buf_;
 };
 
+/// Reads fields in order from `data`, the part of a file that may be parsed (the caller leaves out a trailing
+/// checksum it verified). A read past the end throws IoError with `short_reason` as the start of its reason:
+/// "truncated" when the reader has no other way to know the file's size, or what a shortfall means once the
+/// size has been checked (the counts in the file disagree with it).
 class Reader {
  public:
-  Reader(std::string_view data, std::string file) : data_(data), file_(std::move(file)) {}
+  Reader(std::string_view data, std::string file, std::string short_reason = "truncated")
+      : data_(data), file_(std::move(file)), short_reason_(std::move(short_reason)) {}
   std::uint64_t offset() const noexcept { return pos_; }
+  void seek(std::size_t pos) noexcept { pos_ = pos <= data_.size() ? pos : data_.size(); }
   std::size_t remaining() const noexcept { return data_.size() - pos_; }
   [[noreturn]] void fail(const std::string& reason) const { throw IoError(file_, reason, IoError::kNoLine, pos_); }
   void need(std::size_t n, const char* what) const {
-    if (n > remaining()) fail(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " + std::to_string(remaining()) + " left");
+    if (n > remaining())
+      fail(short_reason_ + ": " + what + " needs " + std::to_string(n) + " bytes, " + std::to_string(remaining()) + " left");
   }
   template <class T> T le(const char* what) {
     need(sizeof(T), what);
-    std::uint64_t v = 0;
-    for (std::size_t i = 0; i < sizeof(T); ++i) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(data_[pos_ + i])) << (8 * i);
+    const T v = load_le<T>(data_.data() + pos_);
     pos_ += sizeof(T);
-    return static_cast<T>(v);
+    return v;
   }
   float f32(const char* what) {
     const float v = std::bit_cast<float>(le<std::uint32_t>(what));
@@ -68,48 +83,24 @@ class Reader {
     }
     return v;
   }
-  /// A count of items of `item_bytes` each that must fit in the rest of the file (checked before anything
+  /// A count of items of `item_bytes` each that must fit in the rest of the data (checked before anything
   /// is allocated from it).
   std::uint32_t count(const char* what, std::size_t item_bytes) {
     const std::uint64_t at = pos_;
     const std::uint32_t n = le<std::uint32_t>(what);
     if (item_bytes > 0 && static_cast<std::uint64_t>(n) * item_bytes > remaining()) {
       pos_ = at;
-      fail(std::string(what) + ": count " + std::to_string(n) + " larger than the file can hold");
+      fail(std::string(what) + " " + std::to_string(n) + " needs " + std::to_string(std::uint64_t{n} * item_bytes) +
+           " bytes, " + std::to_string(remaining() - 4) + " left");
     }
     return n;
-  }
-  /// Verifies the trailing FNV-1a 64 checksum over everything before it; call when positioned on it.
-  /// After check_checksum_up_front() succeeded, a parse that ends exactly on the checksum needs no second pass.
-  void check_checksum() {
-    if (checked_up_front_ && pos_ + 8 == data_.size()) {
-      pos_ += 8;
-      return;
-    }
-    const std::uint64_t expect = fnv1a64(data_.data(), pos_);
-    const std::uint64_t got = le<std::uint64_t>("checksum");
-    if (got != expect) {
-      pos_ -= 8;
-      fail("checksum mismatch (file corrupt)");
-    }
-    if (remaining() != 0) fail("trailing bytes after the checksum");
-  }
-  /// Verifies the checksum stored in the last 8 bytes before parsing anything (so that corruption is
-  /// reported as such, not as a confusing parse error).
-  void check_checksum_up_front() {
-    if (data_.size() < 8) throw IoError(file_, "truncated: shorter than a checksum", IoError::kNoLine, data_.size());
-    const std::size_t body = data_.size() - 8;
-    std::uint64_t got = 0;
-    for (std::size_t i = 0; i < 8; ++i) got |= static_cast<std::uint64_t>(static_cast<unsigned char>(data_[body + i])) << (8 * i);
-    if (got != fnv1a64(data_.data(), body)) throw IoError(file_, "checksum mismatch (file corrupt or truncated)", IoError::kNoLine, body);
-    checked_up_front_ = true;
   }
 
  private:
   std::string_view data_;
   std::string file_;
+  std::string short_reason_;
   std::size_t pos_ = 0;
-  bool checked_up_front_ = false;
 };
 
 }  // namespace varmesh::detail

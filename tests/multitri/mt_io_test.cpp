@@ -2,6 +2,7 @@
 #include "multitri/mt_io.hpp"
 
 #include <cstdio>
+#include <string>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 #include "fourk/bisection.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/mt_front.hpp"
+#include "mt_file_edit.hpp"
 #include "test_support.hpp"
 
 namespace varmesh {
@@ -57,19 +59,179 @@ TEST(MtIo, RoundTripIsExact) {
   EXPECT_EQ(f.num_faces(), 2u << 6);
 }
 
-TEST(MtIo, EveryTruncationIsRejected) {
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+// The error decode_mt throws for `bytes`, or a failure when it throws none (or another type).
+IoError decode_error(const std::string& bytes, const std::string& name) {
+  try {
+    decode_mt(bytes, name);
+  } catch (const IoError& e) {
+    return e;
+  }
+  ADD_FAILURE() << name << ": decoded without an IoError";
+  return IoError(name, "no error");
+}
+
+// Where the sections of a version-2 file start, from mt_io.hpp's layout.
+struct VrmLayout {
+  std::size_t positions, faces, base_size, nodes, checksum;
+};
+VrmLayout layout_of(const Mt& mt, std::size_t file_size) {
+  VrmLayout at{};
+  at.positions = testing::kVrmHeaderBytes;
+  at.faces = at.positions + 12 * mt.num_vertices();
+  at.base_size = at.faces + 12 * mt.num_faces();
+  at.nodes = at.base_size + 4;
+  at.checksum = file_size - 8;
+  return at;
+}
+
+// A file cut anywhere says so: "truncated", the file name, and (once the header is complete) how many
+// bytes it has and how many its header declares. Before, every cut past the header read "checksum
+// mismatch (file corrupt or truncated)".
+TEST(MtIo, EveryTruncationIsReportedAsTruncated) {
   const std::string bytes = encode_mt(square_mt(2));
+  ASSERT_EQ(testing::get_le(bytes, testing::kVrmSizeAt, 8), bytes.size());
   for (std::size_t len = 0; len < bytes.size(); ++len) {
-    EXPECT_THROW(decode_mt(std::string_view(bytes).substr(0, len), "cut.vrm"), IoError) << "length " << len;
+    const IoError e = decode_error(bytes.substr(0, len), "cut.vrm");
+    EXPECT_EQ(e.file(), "cut.vrm");
+    EXPECT_TRUE(contains(e.what(), "cut.vrm")) << e.what();
+    EXPECT_TRUE(contains(e.reason(), "truncated")) << "length " << len << ": " << e.what();
+    EXPECT_FALSE(contains(e.reason(), "checksum mismatch")) << "length " << len << ": " << e.what();
+    if (len >= testing::kVrmHeaderBytes) {
+      EXPECT_TRUE(contains(e.reason(), "has " + std::to_string(len) + " bytes but its header declares " +
+                                           std::to_string(bytes.size())))
+          << e.what();
+      EXPECT_EQ(e.byte_offset(), len);
+    }
   }
 }
 
-TEST(MtIo, EveryFlippedByteIsRejected) {
+// A larger MT, cut at a sample of offsets (every section is hit).
+TEST(MtIo, TruncationOfALargerMtIsReportedAsTruncated) {
+  const std::string bytes = encode_mt(square_mt(6));
+  for (std::size_t len = 0; len < bytes.size(); len += 1 + len / 7) {
+    const IoError e = decode_error(bytes.substr(0, len), "big.vrm");
+    EXPECT_TRUE(contains(e.reason(), "truncated")) << "length " << len << ": " << e.what();
+  }
+  const IoError last = decode_error(bytes.substr(0, bytes.size() - 1), "big.vrm");
+  EXPECT_TRUE(contains(last.reason(), "1 missing")) << last.what();
+  EXPECT_TRUE(contains(last.reason(), "in the middle of the checksum")) << last.what();
+}
+
+// The message names the element where the data stops, at the offsets mt_io.hpp's layout gives.
+TEST(MtIo, TruncationNamesWhereTheDataEnds) {
+  const Mt mt = square_mt(2);
+  const std::string bytes = encode_mt(mt);
+  const VrmLayout at = layout_of(mt, bytes.size());
+  const std::string nv = std::to_string(mt.num_vertices()), nf = std::to_string(mt.num_faces());
+  const std::string last_node = std::to_string(mt.num_nodes() - 1);
+  const struct {
+    std::size_t len;
+    std::string where;
+  } cases[] = {
+      {at.positions, "before the position of vertex 0 (of " + nv + ")"},
+      {at.positions + 12 * 2 + 5, "in the middle of the position of vertex 2 (of " + nv + ")"},
+      {at.faces, "before face 0 (of " + nf + ")"},
+      {at.faces + 12 * 3 + 11, "in the middle of face 3 (of " + nf + ")"},
+      {at.base_size + 2, "in the middle of the base image size"},
+      {at.nodes, "before the record of node 1 (nodes 1 to " + last_node + ")"},
+      {at.nodes + 7, "in the middle of the record of node 1 (nodes 1 to " + last_node + ")"},
+      {at.checksum, "before the checksum"},
+  };
+  for (const auto& c : cases) {
+    const IoError e = decode_error(bytes.substr(0, c.len), "cut.vrm");
+    EXPECT_TRUE(contains(e.reason(), "the data ends " + c.where)) << e.what();
+    EXPECT_TRUE(contains(e.reason(), std::to_string(bytes.size() - c.len) + " missing")) << e.what();
+  }
+  // Inside the header, the message says which part.
+  EXPECT_TRUE(contains(decode_error("", "e.vrm").reason(), "truncated: the file is empty"));
+  EXPECT_TRUE(contains(decode_error(bytes.substr(0, 5), "e.vrm").reason(), "5 bytes and ends inside the magic"));
+  EXPECT_TRUE(contains(decode_error(bytes.substr(0, 10), "e.vrm").reason(), "ends inside the format version"));
+  EXPECT_TRUE(contains(decode_error(bytes.substr(0, 30), "e.vrm").reason(), "30 bytes, less than the 40-byte header"));
+}
+
+// Damage that keeps the length is a checksum mismatch (of the header, or of the file), never "truncated":
+// the header's own checksum vouches for the size it declares. Bytes of the magic and the version are
+// refused as what they are.
+TEST(MtIo, EveryFlippedByteIsAChecksumMismatch) {
   const std::string bytes = encode_mt(square_mt(2));
-  for (std::size_t i = 0; i < bytes.size(); ++i) {
-    std::string bad = bytes;
+  for (std::size_t i = 0; i < bytes.size(); ++i)
+    for (unsigned mask : {0x01u, 0x5au, 0x80u}) {
+      std::string bad = bytes;
+      bad[i] = static_cast<char>(static_cast<unsigned char>(bad[i]) ^ mask);
+      const IoError e = decode_error(bad, "flip.vrm");
+      EXPECT_EQ(e.file(), "flip.vrm");
+      if (i < testing::kVrmVersionAt) {
+        EXPECT_TRUE(contains(e.reason(), "bad magic")) << "byte " << i << ": " << e.what();
+      } else if (i < testing::kVrmCountsAt) {
+        EXPECT_TRUE(contains(e.reason(), "unsupported MT file version")) << "byte " << i << ": " << e.what();
+      } else if (i < testing::kVrmHeaderBytes) {
+        EXPECT_TRUE(contains(e.reason(), "checksum mismatch in the header")) << "byte " << i << ": " << e.what();
+        EXPECT_EQ(e.byte_offset(), testing::kVrmHeaderSumAt);
+      } else {
+        EXPECT_TRUE(contains(e.reason(), "checksum mismatch: stored")) << "byte " << i << ": " << e.what();
+        EXPECT_EQ(e.byte_offset(), bytes.size() - 8);
+      }
+    }
+}
+
+TEST(MtIo, BytesAfterTheDeclaredEndAreRefused) {
+  const std::string bytes = encode_mt(square_mt(2));
+  const IoError e = decode_error(bytes + "x", "long.vrm");
+  EXPECT_TRUE(contains(e.reason(), "1 unexpected byte after the end the header declares")) << e.what();
+  EXPECT_EQ(e.byte_offset(), bytes.size());
+  EXPECT_TRUE(contains(decode_error(bytes + bytes, "twice.vrm").reason(),
+                       std::to_string(bytes.size()) + " unexpected bytes"));
+}
+
+// Counts that disagree with the file, behind valid checksums (a file edited by hand): refused by name.
+TEST(MtIo, CountsThatDisagreeWithTheSizeAreRefused) {
+  const Mt mt = square_mt(2);
+  const std::string good = encode_mt(mt);
+  const VrmLayout at = layout_of(mt, good.size());
+  {
+    std::string b = good;  // 2^28 vertices: 3 GB of positions
+    testing::put_le(b, testing::kVrmCountsAt, 1u << 28, 4);
+    testing::reseal_all(b);
+    const IoError e = decode_error(b, "edit.vrm");
+    EXPECT_TRUE(contains(e.reason(), "268435456 vertices")) << e.what();
+    EXPECT_TRUE(contains(e.reason(), "bytes, the file has " + std::to_string(good.size()))) << e.what();
+    EXPECT_EQ(e.byte_offset(), testing::kVrmCountsAt);
+  }
+  {
+    std::string b = good;  // node 1 removes more faces than the rest of the file holds
+    testing::put_le(b, at.nodes + 5, 0xFFFFFFF0u, 4);
+    testing::reseal_all(b);
+    const IoError e = decode_error(b, "edit.vrm");
+    EXPECT_TRUE(contains(e.reason(), "removed count 4294967280 needs")) << e.what();
+    EXPECT_EQ(e.byte_offset(), at.nodes + 5);
+  }
+  {
+    std::string b = good;  // node 1 removes one face fewer: its records end 4 bytes before the checksum
+    const std::uint64_t r = testing::get_le(b, at.nodes + 5, 4);
+    ASSERT_GT(r, 0u);
+    testing::put_le(b, at.nodes + 5, r - 1, 4);
+    testing::reseal_all(b);
+    EXPECT_THROW(decode_mt(b, "edit.vrm"), IoError);
+  }
+}
+
+// Version-1 files (no size, no header checksum) are still read; a cut one is refused and says it may be cut.
+TEST(MtIo, VersionOneFilesAreStillRead) {
+  const Mt mt = square_mt(3);
+  const std::string v1 = testing::as_version_1(encode_mt(mt));
+  const Mt back = decode_mt(v1, "old.vrm");
+  back.validate();
+  expect_same(mt, back);
+  for (std::size_t len = 0; len < v1.size(); ++len) {
+    const IoError e = decode_error(v1.substr(0, len), "old.vrm");
+    EXPECT_TRUE(contains(e.reason(), "truncated")) << "length " << len << ": " << e.what();
+  }
+  for (std::size_t i = 0; i < v1.size(); ++i) {
+    std::string bad = v1;
     bad[i] = static_cast<char>(bad[i] ^ 0x5a);
-    EXPECT_THROW(decode_mt(bad, "flip.vrm"), IoError) << "byte " << i;
+    EXPECT_THROW(decode_mt(bad, "old.vrm"), IoError) << "byte " << i;
   }
 }
 
@@ -83,12 +245,12 @@ TEST(MtIo, MessagesNameTheProblem) {
     EXPECT_EQ(e.file(), "junk.vrm");
   }
   std::string future = bytes;
-  future[8] = 2;
+  future[8] = 3;
   try {
     decode_mt(future, "future.vrm");
     FAIL();
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("version 2"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("version 3"), std::string::npos);
   }
   EXPECT_THROW(read_mt("/nonexistent/dir/x.vrm"), IoError);
   // A failed write leaves nothing behind.
@@ -97,23 +259,13 @@ TEST(MtIo, MessagesNameTheProblem) {
   EXPECT_TRUE(std::filesystem::is_empty(dir));
 }
 
-// FNV-1a 64 written here again (mt_io.hpp documents it), so a test can re-seal an edited file.
-void reseal(std::string& b) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (std::size_t i = 0; i + 8 < b.size(); ++i) {
-    h ^= static_cast<unsigned char>(b[i]);
-    h *= 0x100000001b3ull;
-  }
-  for (int k = 0; k < 8; ++k) b[b.size() - 8 + static_cast<std::size_t>(k)] = static_cast<char>(h >> (8 * k));
-}
-
 // Corners exchanged between faces of two successive nodes, re-sealed: a fuzzer found such a file (two
 // border splits of an adaptive height field) that loaded and passed Mt::validate, while the front after one
 // of the splits used a directed edge twice. Every edit the reader accepts must give conforming fronts.
 TEST(MtIo, EditedFacesBehindAValidChecksumGiveConformingFronts) {
   const Mt mt = square_mt(4);
   const std::string good = encode_mt(mt);
-  const std::size_t faces_at = 24 + 12 * mt.num_vertices();
+  const std::size_t faces_at = testing::kVrmHeaderBytes + 12 * mt.num_vertices();
   std::size_t accepted = 0, refused = 0;
   for (NodeId n = 1; n + 1 < mt.num_nodes(); ++n)
     for (FaceId f = mt.image_begin(n); f < mt.image_end(n); ++f)
@@ -121,7 +273,7 @@ TEST(MtIo, EditedFacesBehindAValidChecksumGiveConformingFronts) {
         for (std::size_t k = 0; k < 3; ++k) {
           std::string b = good;
           for (std::size_t byte = 0; byte < 4; ++byte) std::swap(b[faces_at + 12 * f + 4 * k + byte], b[faces_at + 12 * g + 4 * k + byte]);
-          reseal(b);
+          testing::reseal(b);
           Mt e;
           try {
             e = decode_mt(b, "edit.vrm");
