@@ -69,6 +69,8 @@ Layout layout_of(const VertexHierarchy& h, const std::vector<std::uint8_t>& imag
 }
 
 // A hierarchy, its file image and the image's layout: what the edit-and-reseal tests start from.
+// Tests bind the members to plain references, not a structured binding: clang before 16 does not let a
+// lambda capture a structured binding (a C++20 addition), and several tests' lambdas use them.
 struct Encoded {
   VertexHierarchy h;
   std::vector<std::uint8_t> good;
@@ -482,7 +484,9 @@ TEST(HierarchyIo, ChecksumMismatchNamesTheChecksum) {
 // Damage behind a valid checksum (a buggy writer, or a deliberate edit): the parser and the builder catch it.
 TEST(HierarchyIo, SemanticErrorsBehindAValidChecksum) {
   const Encoded fixture = encoded(build_locked_colored(4));
-  const auto& [h, good, at] = fixture;
+  const VertexHierarchy& h = fixture.h;
+  const Bytes& good = fixture.good;
+  const Layout& at = fixture.at;
   auto edited = [&](std::size_t offset, std::uint64_t value, int width) {
     Bytes b = good;
     put_le(b, offset, value, width);
@@ -548,7 +552,9 @@ void rejected(Bytes b, const std::string& reason) {
 // when writing its result, without naming the hierarchy; a locked leaf could be collapsed, a flag be 2.
 TEST(HierarchyIo, ColoursAndLocksAreChecked) {
   const Encoded fixture = encoded(build_locked_colored(4));
-  const auto& [h, good, at] = fixture;
+  const VertexHierarchy& h = fixture.h;
+  const Bytes& good = fixture.good;
+  const Layout& at = fixture.at;
   ASSERT_TRUE(h.has_colors());
   ASSERT_NE(at.locked, at.repair);  // the lock flags are stored
   auto refused = [](Bytes b, const std::string& reason) {  // by the reader itself, at a byte offset
@@ -590,7 +596,9 @@ TEST(HierarchyIo, ColoursAndLocksAreChecked) {
 // (fl^ and fr^ swapped with their cut vertices). Found by a review; each edit passed the reader before.
 TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
   const Encoded fixture = encoded(build_vertex_hierarchy(make_grid(5, 4)));
-  const auto& [h, good, at] = fixture;
+  const VertexHierarchy& h = fixture.h;
+  const Bytes& good = fixture.good;
+  const Layout& at = fixture.at;
   const std::size_t nl = h.num_leaves(), nc = h.num_collapses();
   auto record_at = [&](std::size_t i) { return at.records + 40 * i; };
   // A collapse with both sides (fl^ and fr^).
@@ -682,7 +690,9 @@ TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
 // fuzzing past the checksum; validate() now replays the collapses on the original faces.
 TEST(HierarchyIo, TopologyNoCollapseSequenceMakesIsRejected) {
   const Encoded fixture = encoded(build_vertex_hierarchy(make_grid(8, 7)));
-  const auto& [h, good, at] = fixture;
+  const VertexHierarchy& h = fixture.h;
+  const Bytes& good = fixture.good;
+  const Layout& at = fixture.at;
   const std::size_t nl = h.num_leaves(), nc = h.num_collapses();
   {
     // A base face turned over: its edges now run the same way as its neighbours'.
@@ -728,7 +738,9 @@ TEST(HierarchyIo, TopologyNoCollapseSequenceMakesIsRejected) {
 // A small deterministic fuzzer; run under the sanitizers in CI, where an out-of-bounds access fails it.
 TEST(HierarchyIo, AcceptedEditsBehindAValidChecksumAreSafeToRun) {
   const Encoded fixture = encoded(build_vertex_hierarchy(make_grid(6, 5)));
-  const auto& [h, good, at] = fixture;
+  const VertexHierarchy& h = fixture.h;
+  const Bytes& good = fixture.good;
+  const Layout& at = fixture.at;
   const std::size_t nl = h.num_leaves(), nn = h.num_nodes();
   std::mt19937 rng(20261124);
   std::size_t accepted = 0, refused = 0;
