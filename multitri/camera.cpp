@@ -15,13 +15,35 @@ namespace varmesh {
 namespace {
 // lookAt needs an up vector that is not parallel to the view direction (else every plane of the frustum is
 // NaN and culling silently stops); a top view of a terrain with the default +z up is the common case. Fall
-// back to the world axis least aligned with the view (y first).
+// back to the world axis least aligned with the view (y first). The test runs on `up` scaled so that its
+// largest component is 1: glm::length of an up near 1e20 overflows float (and near 1e-20 underflows), which
+// made the test fail and replaced a perfectly usable up by an axis. Such an up is returned scaled (lookAt
+// would overflow on it too); any other is returned as it is. `forward` is a unit vector.
 glm::vec3 usable_up(const glm::vec3& forward, const glm::vec3& up) {
-  if (glm::length(glm::cross(forward, up)) > 1e-3f * glm::length(up)) return up;
+  const float m = std::max({std::abs(up.x), std::abs(up.y), std::abs(up.z)});
+  if (m > 0.0f && std::isfinite(m)) {
+    const glm::vec3 u = up / m;
+    if (glm::length(glm::cross(forward, u)) > 1e-3f * glm::length(u)) return m > 1e-12f && m < 1e12f ? up : u;
+  }
   const glm::vec3 a = glm::abs(forward);
   return a.y <= a.x && a.y <= a.z ? glm::vec3(0.0f, 1.0f, 0.0f)
          : a.x <= a.z             ? glm::vec3(1.0f, 0.0f, 0.0f)
                                   : glm::vec3(0.0f, 0.0f, 1.0f);
+}
+
+bool finite(const glm::mat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+// The unit view direction, computed in double: in float, target - eye beyond about 1e19 overflows the
+// squared length and below about 1e-19 underflows it, and the direction comes out NaN.
+glm::vec3 unit_direction(const glm::vec3& eye, const glm::vec3& target) {
+  const glm::dvec3 d = glm::dvec3(target) - glm::dvec3(eye);
+  const double len = glm::length(d);
+  return len > 0.0 ? glm::vec3(d / len) : glm::vec3(0.0f);
 }
 }  // namespace
 
@@ -48,15 +70,30 @@ void Frustum::validate() const {
 }
 
 glm::vec3 Camera::view_up() const {
-  const glm::vec3 d = target - eye;
-  const float len = glm::length(d);
-  return len > 0.0f ? usable_up(d / len, up) : up;
+  const glm::vec3 f = unit_direction(eye, target);
+  return f == glm::vec3(0.0f) ? up : usable_up(f, up);
 }
 
-glm::mat4 Camera::view() const { return glm::lookAt(eye, target, view_up()); }
+// Both check the camera: they are called once per frame or per picture (Grid48Front::update_view, the
+// renderer), where validate() costs nothing next to the work that follows.
+glm::mat4 Camera::view() const {
+  validate();
+  const glm::mat4 m = glm::lookAt(eye, target, view_up());
+  if (!finite(m))
+    throw InvalidInput("camera: the view matrix overflows float (eye at distance " +
+                       std::to_string(glm::length(glm::dvec3(eye))) + " from the origin, " +
+                       std::to_string(glm::length(glm::dvec3(target) - glm::dvec3(eye))) +
+                       " from the target); move the scene nearer to the origin or use frustum(), which works in double");
+  return m;
+}
 
 glm::mat4 Camera::projection() const {
-  return glm::perspective(glm::radians(fov_y_deg), aspect, z_near, z_far);
+  validate();
+  const glm::mat4 m = glm::perspective(glm::radians(fov_y_deg), aspect, z_near, z_far);
+  if (!finite(m))
+    throw InvalidInput("camera: the projection matrix overflows float (aspect " + std::to_string(aspect) + ", z_near " +
+                       std::to_string(z_near) + ", z_far " + std::to_string(z_far) + ")");
+  return m;
 }
 
 glm::vec3 Camera::forward() const { return glm::normalize(target - eye); }

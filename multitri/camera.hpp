@@ -46,17 +46,28 @@ struct Camera {
 
   /// Throws InvalidInput (naming the field) unless every field is finite, eye != target, up != 0,
   /// fov_y_deg is in (0, 180), aspect > 0 and 0 < z_near < z_far. A camera that fails it makes NaN or
-  /// inverted planes, which cull nothing or everything without a word.
+  /// inverted planes, which cull nothing or everything without a word. An `up` parallel to the view
+  /// direction is not an error: view_up() replaces it.
   void validate() const;
-  /// lookAt(eye, target, up); an `up` parallel to the view direction (a top view with the default +z up)
-  /// is replaced by the world axis least aligned with the view (+y first), as frame_sphere does.
+  /// lookAt(eye, target, view_up()): world to eye coordinates, looking down -z. Calls validate() first
+  /// (it is called once per frame or picture, where that costs nothing). Throws InvalidInput when the camera
+  /// fails validate(), or when the matrix is not finite in float: eye and target more than about 1e19 apart
+  /// or closer than about 1e-19, or the eye near float's limit (frustum(), computed in double, still works
+  /// for those).
   glm::mat4 view() const;
-  /// The up vector view() uses (see above).
+  /// The up vector view() and frustum() use: `up`, except that an `up` parallel to the view direction (a top
+  /// view with the default +z up) is replaced by the world axis least aligned with the view (+y first), as
+  /// frame_sphere does, and an `up` too long or too short for float arithmetic (largest component beyond
+  /// 1e12 or below 1e-12) is scaled to a largest component of 1. Does not check the camera; on eye == target
+  /// it returns `up`.
   glm::vec3 view_up() const;
+  /// glm::perspective(fov_y_deg, aspect, z_near, z_far): eye to clip coordinates (OpenGL conventions, depth
+  /// in [-1, 1]). Calls validate() first; throws InvalidInput when the camera fails it, or when the matrix
+  /// is not finite in float (an aspect or a z range at the edge of float's range).
   glm::mat4 projection() const;
-  /// The view frustum of projection() * view(). Calls validate() first (throws InvalidInput). view(),
-  /// view_up(), projection(), forward() and pixels_per_unit_at_distance_one() do not check: on a camera that
-  /// fails validate() they return NaN or meaningless values.
+  /// The view frustum of projection() * view(), computed in double. Calls validate() first (throws
+  /// InvalidInput). view_up(), forward() and pixels_per_unit_at_distance_one() do not check: on a camera
+  /// that fails validate() they return NaN or meaningless values.
   Frustum frustum() const;
   /// Pixels per unit of world length seen at distance 1 on a viewport `viewport_height` pixels high.
   float pixels_per_unit_at_distance_one(float viewport_height) const;

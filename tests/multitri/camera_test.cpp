@@ -228,6 +228,110 @@ TEST(Camera, FrustumRefusesAnInvalidCamera) {
   EXPECT_NO_THROW(Camera{}.frustum().validate());
 }
 
+// view() and projection() check the camera too: they used to return NaN (eye == target), infinities (fov
+// 180, aspect 0) or an inverted depth range (z_near > z_far) without a word.
+TEST(Camera, ViewAndProjectionRefuseAnInvalidCamera) {
+  for (const auto& [what, cam] : broken_cameras()) {
+    EXPECT_THROW(cam.view(), InvalidInput) << what;
+    EXPECT_THROW(cam.projection(), InvalidInput) << what;
+  }
+}
+
+bool all_finite(const glm::mat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+// The rotation part of a view matrix is orthonormal and the target lies on the -z axis at its distance.
+void expect_proper_view(const Camera& cam, const char* what) {
+  const glm::mat4 v = cam.view();
+  ASSERT_TRUE(all_finite(v)) << what;
+  const glm::mat3 r(v);
+  const glm::mat3 rtr = glm::transpose(r) * r;
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(rtr[c][k], c == k ? 1.0f : 0.0f, 1e-5f) << what;
+  const glm::vec4 t = v * glm::vec4(cam.target, 1.0f);
+  const float dist = glm::length(cam.target - cam.eye);
+  EXPECT_NEAR(t.x, 0.0f, 1e-5f * dist) << what;
+  EXPECT_NEAR(t.y, 0.0f, 1e-5f * dist) << what;
+  EXPECT_NEAR(t.z, -dist, 1e-5f * dist) << what;
+}
+
+// An up parallel to the view direction (either way) is not an error: another axis is used, and the view and
+// the frustum agree.
+TEST(Camera, UpParallelToTheViewGivesAProperView) {
+  for (float sign : {1.0f, -1.0f}) {
+    Camera cam;
+    cam.eye = {1.0f, 2.0f, 7.0f};
+    cam.target = {1.0f, 2.0f, 0.0f};
+    cam.up = {0.0f, 0.0f, 3.0f * sign};
+    EXPECT_NO_THROW(cam.validate());
+    expect_proper_view(cam, sign > 0 ? "up along the view" : "up against the view");
+    EXPECT_GT(glm::length(glm::cross(glm::normalize(cam.target - cam.eye), cam.view_up())), 0.5f);
+    const Frustum f = cam.frustum();
+    const glm::mat4 m = cam.projection() * cam.view();
+    // A point in view is inside the frustum, one behind the camera is not.
+    for (const glm::vec3& p : {glm::vec3(1.2f, 2.1f, 0.5f), glm::vec3(1.0f, 2.0f, 9.0f)}) {
+      const glm::vec4 c = m * glm::vec4(p, 1.0f);
+      const bool in_clip = std::abs(c.x) <= c.w && std::abs(c.y) <= c.w && std::abs(c.z) <= c.w;
+      EXPECT_EQ(f.contains_point(p), in_clip);
+    }
+  }
+}
+
+// An up of any length gives the same view as the unit up: glm::length of a 1e30 up overflowed float, and
+// one of 1e-30 underflowed, so the parallel test failed and the up was silently replaced by the y axis.
+TEST(Camera, UpOfAnyLengthGivesTheSameView) {
+  Camera unit;
+  unit.eye = {3.0f, -1.0f, 2.5f};  // view direction (-3, 1.5, -2.5): the fallback axis is y, not the up's z
+  unit.target = {0.0f, 0.5f, 0.0f};
+  unit.up = {0.0f, 0.0f, 1.0f};
+  const glm::mat4 expected = unit.view();
+  const Frustum expected_f = unit.frustum();
+  for (float scale : {1e30f, 1e-30f, 1e-40f}) {
+    Camera cam = unit;
+    cam.up *= scale;
+    const glm::mat4 v = cam.view();
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) EXPECT_NEAR(v[c][r], expected[c][r], 1e-5f) << "up scaled by " << scale;
+    const Frustum f = cam.frustum();
+    for (std::size_t i = 0; i < 6; ++i) {
+      EXPECT_NEAR(glm::length(f.planes[i].n - expected_f.planes[i].n), 0.0f, 1e-5f) << "plane " << i;
+      EXPECT_NEAR(f.planes[i].d, expected_f.planes[i].d, 1e-5f) << "plane " << i;
+    }
+  }
+}
+
+// Valid cameras whose float matrices are not finite: view() and projection() throw instead of returning
+// NaN or infinity; frustum(), computed in double, still works for the far and near ones.
+TEST(Camera, MatricesThatOverflowFloatAreRefused) {
+  Camera far;
+  far.eye = {0.0f, -1e20f, 0.0f};
+  far.z_near = 1e19f;
+  far.z_far = 1e21f;
+  ASSERT_NO_THROW(far.validate());
+  EXPECT_THROW(far.view(), InvalidInput);
+  EXPECT_NO_THROW(far.frustum());
+  Camera near;
+  near.eye = {1e-30f, 0.0f, 0.0f};
+  near.target = {0.0f, 0.0f, 0.0f};
+  ASSERT_NO_THROW(near.validate());
+  EXPECT_THROW(near.view(), InvalidInput);
+  EXPECT_NO_THROW(near.frustum());
+  Camera thin;
+  thin.aspect = 1e-39f;  // positive, but 1 / aspect overflows
+  ASSERT_NO_THROW(thin.validate());
+  EXPECT_THROW(thin.projection(), InvalidInput);
+  // A camera at float's limit.
+  Camera edge;
+  edge.eye = {3e38f, 3e38f, 3e38f};
+  edge.target = edge.eye * 0.5f;
+  ASSERT_NO_THROW(edge.validate());
+  EXPECT_THROW(edge.view(), InvalidInput);
+}
+
 TEST(Frustum, ValidateNamesANonFiniteOrZeroPlane) {
   const Frustum good = Camera{}.frustum();
   for (std::size_t i = 0; i < 6; ++i) {
