@@ -45,6 +45,47 @@ float round_up(double v) {
   return f;
 }
 
+// The size rule of Grid48's constructor. Every distance the build squares in float (bounding spheres: a
+// diamond's corners and children from its centre) is at most the diagonal of the lattice's box, padding
+// included, and every node error at most the height span (the exact errors) or a few dozen times it (the
+// fast bound): all finite when the diagonal squared is, with a margin for rounding (the limit of the
+// command line's height field and mesh readers too). zlo and zhi are the lowest and highest samples.
+void check_span(const HeightField& field, std::size_t lw, std::size_t lh, float zlo, float zhi) {
+  const double dx = double(lw - 1) * double(field.spacing_x), dy = double(lh - 1) * double(field.spacing_y);
+  const double dz = double(zhi) - double(zlo);
+  constexpr double kLimit = 0.999 * double(std::numeric_limits<float>::max());
+  auto too_big = [](double x, double y, double z) { return !(x * x + y * y + z * z <= kLimit); };
+  if (!too_big(dx, dy, dz)) return;
+  auto g = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v);
+    return std::string(text);
+  };
+  // The first sample holding a height, and its (row, column).
+  auto index_of = [&](float z) {
+    return static_cast<std::size_t>(std::find(field.z.begin(), field.z.end(), z) - field.z.begin());
+  };
+  auto at = [&](float z) {
+    const std::size_t i = index_of(z);
+    return g(double(z)) + " at (row " + std::to_string(i / field.width) + ", column " + std::to_string(i % field.width) + ")";
+  };
+  const std::string tail =
+      ": more than about 1.8e19, too large to measure node errors and bounding spheres in float (their squared "
+      "distances overflow)";
+  if (too_big(0.0, 0.0, dz))
+    throw InvalidInput("Grid48: the heights span " + g(dz) + ", from " + at(zlo) + " to " + at(zhi) + tail, index_of(zhi));
+  if (too_big(dx, 0.0, 0.0))
+    throw InvalidInput("Grid48: spacing_x " + g(field.spacing_x) + " times " + std::to_string(lw - 1) +
+                       " lattice steps is " + g(dx) + " across" + tail);
+  if (too_big(0.0, dy, 0.0))
+    throw InvalidInput("Grid48: spacing_y " + g(field.spacing_y) + " times " + std::to_string(lh - 1) +
+                       " lattice steps is " + g(dy) + " across" + tail);
+  throw InvalidInput("Grid48: the lattice's box is " + g(std::sqrt(dx * dx + dy * dy + dz * dz)) + " across (" +
+                     std::to_string(lw) + " x " + std::to_string(lh) + " lattice points, spacing_x " + g(field.spacing_x) +
+                     ", spacing_y " + g(field.spacing_y) + (zhi > zlo ? ", heights from " + at(zlo) + " to " + at(zhi) : "") +
+                     ")" + tail);
+}
+
 }  // namespace
 
 Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
@@ -80,24 +121,26 @@ Grid48::Grid48(const HeightField& field, const Grid48Options& options) {
   lw_ = tx_ * s + 1;
   lh_ = ty_ * s + 1;
   if (double(lw_) * double(lh_) > double(1u << 30)) throw InvalidInput("Grid48: grid too large (more than 2^30 lattice points)");
-  // Lattice coordinates are column * spacing_x and row * spacing_y in float, padding included.
-  auto check_extent = [](const char* name, float spacing, std::size_t steps) {
-    if (double(steps) * double(spacing) <= double(std::numeric_limits<float>::max())) return;
-    char text[160];
-    std::snprintf(text, sizeof text, "Grid48: %s %g times %zu lattice steps overflows float", name, double(spacing), steps);
-    throw InvalidInput(text);
-  };
-  check_extent("spacing_x", sx_, lw_ - 1);
-  check_extent("spacing_y", sy_, lh_ - 1);
+  check_span(field, lw_, lh_, field.z[0], field.z[0]);  // the spacings alone, before allocating
   row_of_ = detail::FastDivider(static_cast<std::uint32_t>(lw_));
   // Heights straight into the records (padding repeats the last row and column); errors come later.
   records_.resize(lw_ * lh_);
+  float zlo = field.z[0], zhi = field.z[0];
   for (std::size_t y = 0; y < lh_; ++y) {
     const float* src = field.z.data() + std::min(y, height_ - 1) * width_;
     PointRecord* dst = records_.data() + y * lw_;
-    for (std::size_t x = 0; x < width_; ++x) dst[x] = {0.0f, src[x]};
+    if (y < height_) {
+      for (std::size_t x = 0; x < width_; ++x) {
+        zlo = std::min(zlo, src[x]);
+        zhi = std::max(zhi, src[x]);
+        dst[x] = {0.0f, src[x]};
+      }
+    } else {
+      for (std::size_t x = 0; x < width_; ++x) dst[x] = {0.0f, src[x]};
+    }
     for (std::size_t x = width_; x < lw_; ++x) dst[x] = {0.0f, src[width_ - 1]};
   }
+  check_span(field, lw_, lh_, zlo, zhi);
   if (options.reference_scan) {
     z_.resize(lw_ * lh_);
     for (std::size_t p = 0; p < records_.size(); ++p) z_[p] = records_[p].z;

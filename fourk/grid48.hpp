@@ -93,10 +93,15 @@ struct Grid48Options {
 class Grid48 {
  public:
   /// Builds the hierarchy. Throws InvalidInput (naming the option or the sample) for grids smaller than
-  /// 2 x 2, larger than 2^30 lattice points, with non-finite samples, with a tile_size that is not a power
-  /// of two in [2, 2^15] or a max_padding below 1, or with a spacing so large that a lattice point's x or
-  /// y coordinate (column * spacing_x, row * spacing_y) overflows float. O(samples * levels) for the
-  /// exact errors.
+  /// 2 x 2, larger than 2^30 lattice points, with non-finite samples (HeightField::validate), with a
+  /// tile_size that is not a power of two in [2, 2^15] or a max_padding below 1, or too large for float:
+  /// the lattice's box, padding included, must have a diagonal whose square is finite in float (at most
+  /// about 1.8e19), i.e. X^2 + Y^2 + Z^2 <= 0.999 * FLT_MAX with X = (lattice_width() - 1) * spacing_x,
+  /// Y = (lattice_height() - 1) * spacing_y and Z = highest sample - lowest sample. Within that rule every
+  /// node error and radius is finite (the build squares distances in float); heights alone may lie anywhere
+  /// in float's range. The message names the spacing, or for heights the height span and the (row, column)
+  /// of the lowest and highest samples (the element is the highest sample's index). O(samples * levels)
+  /// for the exact errors.
   explicit Grid48(const HeightField& field, const Grid48Options& options = {});
   Grid48(const Grid48&) = default;
   Grid48& operator=(const Grid48&) = default;

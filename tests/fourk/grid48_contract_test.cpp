@@ -274,16 +274,103 @@ TEST(Grid48Contract, BuildOptionsAndSpacingsAreChecked) {
   EXPECT_NO_THROW(Grid48 g8(f, o));
   HeightField wide = make_fractal_terrain(33, 17, 1);
   wide.spacing_x = 3e37f;
-  EXPECT_NE(message_of([&] { Grid48 g(wide); }).find("spacing_x"), std::string::npos);
+  EXPECT_NE(message_of([&] { Grid48 g(wide); }).find("spacing_x 3e+37 times 32 lattice steps"), std::string::npos);
   wide.spacing_x = 1.0f;
   wide.spacing_y = 1e38f;
-  EXPECT_NE(message_of([&] { Grid48 g(wide); }).find("spacing_y"), std::string::npos);
-  // Large but representable: accepted, and the mesh is finite.
+  EXPECT_NE(message_of([&] { Grid48 g(wide); }).find("spacing_y 1e+38 times 16 lattice steps"), std::string::npos);
+  // Representable coordinates but unmeasurable distances: 16 rows 1e36 apart were accepted, with infinite
+  // bounding spheres (their squared radii overflow float).
   wide.spacing_y = 1e36f;
+  EXPECT_NE(message_of([&] { Grid48 g(wide); }).find("spacing_y 1e+36"), std::string::npos);
+  // Neither direction alone, but the diagonal: 1.5e19 by 1.5e19.
+  wide.spacing_x = 1.5e19f / 32.0f;
+  wide.spacing_y = 1.5e19f / 16.0f;
+  EXPECT_NE(message_of([&] { Grid48 g(wide); }).find("the lattice's box is 2.12132e+19 across (33 x 17 lattice points"),
+            std::string::npos);
+  // Just inside the limit (1.6e19 along y): accepted, every radius finite, and the mesh is finite.
+  wide.spacing_x = 1.0f;
+  wide.spacing_y = 1e18f;
   const Grid48 g(wide);
+  for (Index p = 0; p < g.num_points(); ++p) ASSERT_TRUE(std::isfinite(g.radius(p))) << "point " << p;
   Grid48Front fr(g);
   extract(fr, object_query(0.0f));
   EXPECT_NO_THROW(fr.to_mesh().validate());
+}
+
+// Heights of +-3e38 (finite, so HeightField::validate passes) made infinite node errors and radii: every
+// error-driven query then refined everything and a view query nothing. The rule: the lattice's box must
+// have a diagonal whose square is finite in float (about 1.8e19), so the height span alone at most that.
+TEST(Grid48Contract, HeightSpanBeyondFloatIsRefusedNamingTheSamples) {
+  HeightField f = make_fractal_terrain(9, 9, 1);
+  f.z[2 * 9 + 5] = 3e38f;   // (row 2, column 5)
+  f.z[7 * 9 + 1] = -3e38f;  // (row 7, column 1)
+  for (const bool exact : {true, false}) {
+    Grid48Options o;
+    o.exact_errors = exact;
+    try {
+      Grid48 g(f, o);
+      ADD_FAILURE() << "accepted heights spanning 6e38";
+    } catch (const InvalidInput& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("the heights span 6e+38, from -3e+38 at (row 7, column 1) to 3e+38 at (row 2, column 5)"),
+                std::string::npos) << m;
+      EXPECT_NE(m.find("too large to measure node errors"), std::string::npos) << m;
+      EXPECT_EQ(e.element(), 2u * 9u + 5u);
+    }
+  }
+  // A span alone past the limit, away from float's own end.
+  f = make_fractal_terrain(9, 9, 1);
+  f.z[3] = 9.25e18f;
+  f.z[4] = -9.25e18f;
+  EXPECT_NE(message_of([&] { Grid48 g(f); }).find("the heights span 1.85e+19"), std::string::npos);
+  // Non-finite samples are refused by HeightField::validate, named by their index.
+  f.z[4] = std::numeric_limits<float>::quiet_NaN();
+  try {
+    Grid48 g(f);
+    ADD_FAILURE() << "accepted a NaN sample";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.element(), 4u);
+  }
+}
+
+// The largest accepted span (1.8e19, heights of +-9e18 in a rough pattern): finite errors and radii at every
+// point, for each way of computing them, and extractions that keep their error bound.
+TEST(Grid48Contract, LargestAcceptedHeightSpanGivesFiniteBounds) {
+  HeightField f = make_fractal_terrain(35, 27, 3);  // tiles of 4, padded: the lattice repeats the border
+  float lo = f.z[0], hi = f.z[0];
+  for (const float z : f.z) lo = std::min(lo, z), hi = std::max(hi, z);
+  for (std::size_t i = 0; i < f.z.size(); ++i) {
+    const float t = (f.z[i] - lo) / (hi - lo);  // in [0, 1]
+    f.z[i] = ((i * 7919) % 5 == 0 ? 9e18f : -9e18f) * (0.5f + 0.5f * t);
+  }
+  f.z[0] = 9e18f;
+  f.z[1] = -9e18f;
+  for (int mode = 0; mode < 3; ++mode) {
+    SCOPED_TRACE(mode == 0 ? "exact" : mode == 1 ? "fast bound" : "reference scan");
+    Grid48Options o;
+    o.exact_errors = mode != 1;
+    o.reference_scan = mode == 2;
+    const Grid48 g(f, o);
+    ASSERT_TRUE(g.needs_clip());
+    float top = 0.0f;
+    for (Index p = 0; p < g.num_points(); ++p) {
+      ASSERT_TRUE(std::isfinite(g.error(p))) << "point " << p;
+      ASSERT_TRUE(std::isfinite(g.radius(p))) << "point " << p;
+      top = std::max(top, g.error(p));
+    }
+    EXPECT_GE(top, 9e18f);  // the span is really there
+    Grid48Front fr(g);
+    std::size_t faces = 0;
+    for (const float e : {1e19f, 3e18f, 1e18f, 0.0f}) {
+      fr.extract_fast(object_query(e));
+      fr.validate();
+      EXPECT_GE(fr.num_faces(), faces) << "threshold " << e;
+      faces = fr.num_faces();
+      const TriMesh m = fr.to_mesh();
+      EXPECT_LE(g.max_vertical_error(m), double(e) * (1.0 + 1e-5) + 1e-6 * 1.8e19) << "threshold " << e;
+    }
+    EXPECT_GT(faces, 2 * g.tiles_x() * g.tiles_y());
+  }
 }
 
 TEST(Grid48Contract, MaxVerticalErrorChecksTheMesh) {
