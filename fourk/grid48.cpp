@@ -969,6 +969,12 @@ Grid48Front::Grid48Front(const Grid48& grid) : grid_(&grid) {
   reset();
 }
 
+Grid48Front& Grid48Front::operator=(const Grid48Front& other) {
+  // A member-by-member copy that failed halfway would mix two fronts' refined flags and boundary sets.
+  if (this != &other) *this = Grid48Front(other);
+  return *this;
+}
+
 template <class Wants>
 void Grid48Front::descend(std::uint32_t ax, std::uint32_t ay, std::uint32_t bx, std::uint32_t by, std::uint32_t cx,
                           std::uint32_t cy, Wants& wants) {
@@ -1210,7 +1216,12 @@ TriMesh Grid48Front::extract_mesh(const Query& q, std::vector<Index>* lattice_id
                       q.triangle_budget == 0 && q.time_budget_ms <= 0.0;
   if (!object) {
     extract_fast(q);
-    return to_mesh(lattice_ids);
+    try {
+      return to_mesh(lattice_ids);
+    } catch (...) {
+      restore_base();  // as promised for every exception here (only memory can run out in to_mesh)
+      throw;
+    }
   }
   clear_refined();
   TriMesh out;
@@ -1494,6 +1505,20 @@ void Grid48Front::prefetch_coarsen(Index p) const {
 
 QueryStats Grid48Front::update_view(const ViewQuery& v) {
   v.validate();
+  try {
+    return update_view_unguarded(v);
+  } catch (...) {
+    // Stopped between two moves: the front is valid, but the records of the diamonds evaluated and not yet
+    // moved no longer describe it, so the next call starts afresh.
+    new_exposed_ = nullptr;
+    new_maximal_ = nullptr;
+    carry_records_ = false;
+    view_valid_ = false;
+    throw;
+  }
+}
+
+QueryStats Grid48Front::update_view_unguarded(const ViewQuery& v) {
   const ViewQuery& o = last_view_;
   const bool same_params = view_valid_ && o.viewport_height == v.viewport_height && o.pixels == v.pixels &&
                            o.object_error == v.object_error && o.camera.fov_y_deg == v.camera.fov_y_deg &&
@@ -1597,6 +1622,10 @@ QueryStats Grid48Front::update_view(const ViewQuery& v) {
 }
 
 void Grid48Front::reset() {
+  // The arrays keep their size (they allocate only on a moved-from front). If making room for the tile
+  // centres throws, the front is the base mesh with its boundary sets left to be rebuilt.
+  sets_valid_ = false;
+  view_valid_ = false;
   refined_.assign(grid_->num_points(), 0);
   touched_.resize(grid_->num_points());
   num_touched_ = 0;
@@ -1606,7 +1635,7 @@ void Grid48Front::reset() {
   exposed_.clear();
   maximal_.clear();
   slot_.assign(grid_->num_points(), kInvalid);
-  view_valid_ = false;
+  make_room(exposed_, grid_->tiles_x() * grid_->tiles_y());
   const std::size_t s = grid_->tile_size(), w = grid_->lattice_width();
   for (std::size_t ty = 0; ty < grid_->tiles_y(); ++ty)
     for (std::size_t tx = 0; tx < grid_->tiles_x(); ++tx) {
@@ -1616,10 +1645,22 @@ void Grid48Front::reset() {
   sets_valid_ = true;
 }
 
+// Callers make room first (make_room), so the push_backs do not throw.
 void Grid48Front::set_add(BoundarySet& s, const Entry& e, Expiry x) {
+  VARMESH_ASSERT(s.entry.size() < s.entry.capacity() && s.expiry.capacity() >= s.entry.capacity());
   slot_[e.point] = static_cast<Index>(s.entry.size());
   s.entry.push_back(e);
   s.expiry.push_back(x);
+}
+
+// The new entry array is filled only once the expiries have room for its whole capacity (reserve may give
+// more than asked), so BoundarySet's invariant holds whichever allocation throws.
+void Grid48Front::grow(BoundarySet& s, std::size_t extra) {
+  std::vector<Entry> entry;
+  entry.reserve(std::max(s.size() + extra, 2 * s.entry.capacity()));
+  s.expiry.reserve(entry.capacity());
+  entry.insert(entry.end(), s.entry.begin(), s.entry.end());  // within the reserve
+  s.entry.swap(entry);
 }
 
 void Grid48Front::set_remove(BoundarySet& s, Index p) {
@@ -1646,8 +1687,16 @@ void Grid48Front::rebuild_sets() {
   }
   exposed_.clear();
   maximal_.clear();
-  for_each_boundary([&](Index p) { set_add(exposed_, entry_of(p), {}); },
-                    [&](Index p) { set_add(maximal_, entry_of(p), {}); });
+  // If making room throws, the partial sets still match slot_ (what the next rebuild clears).
+  for_each_boundary(
+      [&](Index p) {
+        make_room(exposed_, 1);
+        set_add(exposed_, entry_of(p), {});
+      },
+      [&](Index p) {
+        make_room(maximal_, 1);
+        set_add(maximal_, entry_of(p), {});
+      });
   sets_valid_ = true;
 }
 
@@ -1711,6 +1760,7 @@ void Grid48Front::on_coarsened(Index t) {
 
 void Grid48Front::coarsen_unchecked(Index p) {
   if (!sets_valid_) rebuild_sets();
+  make_room_to_coarsen();  // may throw: nothing has changed for p yet
   refined_[p] = 0;
   touched_valid_ = false;
   on_coarsened(p);

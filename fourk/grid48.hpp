@@ -24,6 +24,7 @@
 /// bounds the output size of an object-error extraction. A front adds up to 17 bytes per lattice point
 /// (refined flags, one slot shared by its two boundary sets, the touched list, the vertex maps of to_mesh
 /// and extract_mesh, each allocated on first use) plus its boundary sets (24 bytes per boundary diamond).
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cstddef>
@@ -268,10 +269,16 @@ struct ViewQuery {
 /// synchronise what they share (to_mesh's vertex map), so any number of threads may call them on one
 /// front at once, as long as no thread calls a non-const member at the same time.
 ///
-/// Exceptions: a criterion (Criterion::custom) may throw. refine(), coarsen_one() and the generic
-/// extract()/update() (query.hpp) leave a valid front when it does (each move is complete before the
-/// next evaluation); extract_fast() and extract_mesh(), which rebuild the front in place, leave it at the
-/// base mesh (as after reset()). validate() holds in every case.
+/// Exceptions: a criterion (Criterion::custom) may throw, and any member that allocates may throw
+/// std::bad_alloc. Every member leaves a valid front when something throws (validate() holds, the
+/// candidate listings are the boundary of the refined set, and later calls give the answers a fresh front
+/// would). In detail: a single move (refine() of a diamond whose parents are refined, coarsen_one())
+/// either completes or changes nothing, since the boundary sets make room before the move starts;
+/// refine() of a deeper diamond keeps the ancestors it had refined; the generic extract()/update()
+/// (query.hpp) and update_view() stop between moves (update_view() also forgets its motion records, so
+/// the next call re-evaluates every boundary diamond); extract_fast() and extract_mesh(), which rebuild
+/// the front in place, leave it at the base mesh (as after reset()); reset() leaves the base mesh; a copy
+/// assignment leaves the target unchanged.
 class Grid48Front {
  public:
   /// The base front (the two triangles of every tile). Throws InvalidInput when `grid` is empty (a
@@ -279,6 +286,11 @@ class Grid48Front {
   explicit Grid48Front(const Grid48& grid);
   /// A front keeps a reference to its grid: a temporary Grid48 would leave it dangling.
   explicit Grid48Front(const Grid48&& grid) = delete;
+  Grid48Front(const Grid48Front&) = default;
+  Grid48Front(Grid48Front&&) noexcept = default;
+  /// Copies into a new front, then moves it in: the target is unchanged if the copy throws.
+  Grid48Front& operator=(const Grid48Front& other);
+  Grid48Front& operator=(Grid48Front&&) noexcept = default;
 
   const Grid48& grid() const noexcept { return *grid_; }
   std::size_t num_faces() const noexcept { return num_faces_; }
@@ -433,9 +445,22 @@ class Grid48Front {
     Index point = kInvalid;
     float z = 0.0f, radius = 0.0f, error = 0.0f;
   };
+  // Invariant: expiry.capacity() >= entry.capacity(), so that room in `entry` is room in both (one test
+  // per set before a move; see make_room). Copies keep it; grow() keeps it even when a reserve throws.
   struct BoundarySet {
     std::vector<Expiry> expiry;  // scanned sequentially by update_view every frame (8 bytes per diamond)
     std::vector<Entry> entry;    // parallel: read for stale diamonds, moved between the sets
+    BoundarySet() = default;
+    BoundarySet(const BoundarySet& other) : entry(other.entry) {
+      expiry.reserve(entry.capacity());
+      expiry.insert(expiry.end(), other.expiry.begin(), other.expiry.end());  // within the reserve
+    }
+    BoundarySet& operator=(const BoundarySet& other) {
+      if (this != &other) *this = BoundarySet(other);
+      return *this;
+    }
+    BoundarySet(BoundarySet&&) noexcept = default;
+    BoundarySet& operator=(BoundarySet&&) noexcept = default;
     std::size_t size() const noexcept { return entry.size(); }
     void clear() noexcept {
       expiry.clear();
@@ -461,6 +486,35 @@ class Grid48Front {
   struct ViewContext;
   Entry entry_of(Index p) const noexcept { return {p, grid_->height_at(p), grid_->radius(p), grid_->error(p)}; }
   void set_add(BoundarySet& s, const Entry& e, Expiry x);
+  // Capacity for `extra` more diamonds in s (or indices in v) without a reallocation, so that on_refined and
+  // on_coarsened, once the refined flags have changed, allocate nothing (the only step that can throw comes
+  // before the move). One comparison per set when there is room (BoundarySet's invariant).
+  static void make_room(BoundarySet& s, std::size_t extra) {
+    if (s.entry.capacity() - s.entry.size() < extra) [[unlikely]]
+      grow(s, extra);
+  }
+  static void make_room(std::vector<Index>& v, std::size_t extra) {
+    if (v.capacity() - v.size() < extra) v.reserve(std::max(v.size() + extra, 2 * v.capacity()));
+  }
+  static void grow(BoundarySet& s, std::size_t extra);
+  static std::size_t spare(const BoundarySet& s) noexcept { return s.entry.capacity() - s.entry.size(); }
+  // on_refined adds a diamond to the maximal set and up to four children to the exposed set (and to
+  // new_exposed_); on_coarsened one diamond to the exposed set and up to two parents to the maximal set.
+  // Both sets are tested with one branch.
+  void make_room_to_refine() {
+    if ((spare(exposed_) < 4) | (spare(maximal_) < 1)) [[unlikely]] {
+      make_room(exposed_, 4);
+      make_room(maximal_, 1);
+    }
+    if (new_exposed_) make_room(*new_exposed_, 4);
+  }
+  void make_room_to_coarsen() {
+    if ((spare(exposed_) < 1) | (spare(maximal_) < 2)) [[unlikely]] {
+      make_room(exposed_, 1);
+      make_room(maximal_, 2);
+    }
+    if (new_maximal_) make_room(*new_maximal_, 2);
+  }
   void set_remove(BoundarySet& s, Index p);
   void rebuild_sets();
   // The boundary computed from refined_ alone, read-only: exposed(p) and maximal(p) for each diamond of
@@ -472,6 +526,7 @@ class Grid48Front {
   void on_refined(Index t);
   void on_coarsened(Index t);
   void coarsen_unchecked(Index p);
+  QueryStats update_view_unguarded(const ViewQuery& v);
   std::size_t scan_stale(BoundarySet& s, const ViewContext& cx, bool pick, std::vector<Index>& out);
   void prefetch_refine(Index p) const;
   void prefetch_entry(const BoundarySet& s, Index p) const;
@@ -676,6 +731,7 @@ void Grid48Front::refine(Index p, Sink&& sink) {
     }
     if (!pushed) {
       stack_.pop_back();
+      make_room_to_refine();  // may throw: nothing has changed for t yet
       refined_[t] = 1;
       touched_valid_ = false;
       on_refined(t);
