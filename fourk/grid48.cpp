@@ -1635,11 +1635,11 @@ void Grid48Front::reset() {
   exposed_.clear();
   maximal_.clear();
   slot_.assign(grid_->num_points(), kInvalid);
-  make_room(exposed_, grid_->tiles_x() * grid_->tiles_y());
   const std::size_t s = grid_->tile_size(), w = grid_->lattice_width();
   for (std::size_t ty = 0; ty < grid_->tiles_y(); ++ty)
     for (std::size_t tx = 0; tx < grid_->tiles_x(); ++tx) {
       const Index p = static_cast<Index>((ty * s + s / 2) * w + tx * s + s / 2);
+      if (lacks_room(exposed_, 1)) make_room(exposed_, 1);
       set_add(exposed_, entry_of(p), {});
     }
   sets_valid_ = true;
@@ -1647,23 +1647,29 @@ void Grid48Front::reset() {
 
 // Callers make room first (make_room), so the push_backs do not throw.
 void Grid48Front::set_add(BoundarySet& s, const Entry& e, Expiry x) {
-  VARMESH_ASSERT(s.entry.size() < s.entry.capacity() && s.expiry.capacity() >= s.entry.capacity());
+  VARMESH_ASSERT(!lacks_room(s, 1));
   slot_[e.point] = static_cast<Index>(s.entry.size());
   s.entry.push_back(e);
   s.expiry.push_back(x);
 }
 
-// The new entry array is filled only once the expiries have room for its whole capacity (reserve may give
-// more than asked), so BoundarySet's invariant holds whichever allocation throws.
-void Grid48Front::grow(BoundarySet& s, std::size_t extra) {
-  std::vector<Entry> entry;
-  entry.reserve(std::max(s.size() + extra, 2 * s.entry.capacity()));
-  s.expiry.reserve(entry.capacity());
-  entry.insert(entry.end(), s.entry.begin(), s.entry.end());  // within the reserve
-  s.entry.swap(entry);
+// Capacities double, as push_back's would (the same sizes in the same order: the allocator reuses blocks as
+// it did). Each reserve has the strong guarantee: if the second throws, the first only left spare room.
+void Grid48Front::make_room(BoundarySet& s, std::size_t extra) {
+  auto grow = [extra](auto& v) {
+    if (spare(v) < extra) v.reserve(std::max(v.size() + extra, 2 * v.capacity()));
+  };
+  grow(s.entry);
+  grow(s.expiry);
 }
 
-void Grid48Front::set_remove(BoundarySet& s, Index p) {
+void Grid48Front::make_room(std::size_t exposed, std::size_t maximal, std::vector<Index>* added, std::size_t listed) {
+  make_room(exposed_, exposed);
+  make_room(maximal_, maximal);
+  if (spare(added) < listed) added->reserve(std::max(added->size() + listed, 2 * added->capacity()));
+}
+
+inline void Grid48Front::set_remove(BoundarySet& s, Index p) {
   const Index i = slot_[p];
   const Index last = static_cast<Index>(s.entry.size() - 1);
   if (i != last) {
@@ -1690,20 +1696,24 @@ void Grid48Front::rebuild_sets() {
   // If making room throws, the partial sets still match slot_ (what the next rebuild clears).
   for_each_boundary(
       [&](Index p) {
-        make_room(exposed_, 1);
+        if (lacks_room(exposed_, 1)) make_room(exposed_, 1);
         set_add(exposed_, entry_of(p), {});
       },
       [&](Index p) {
-        make_room(maximal_, 1);
+        if (lacks_room(maximal_, 1)) make_room(maximal_, 1);
         set_add(maximal_, entry_of(p), {});
       });
   sets_valid_ = true;
 }
 
-// t was exposed (every parent refined) and is now refined: it moves to the maximal set (with its record
+// t is exposed (every parent refined) and becomes refined: it moves to the maximal set (with its record
 // when update_view refines it because it is wanted), its parents leave it, its new children are exposed.
-// The slot of a refined point refers to maximal_, of an unrefined one to exposed_.
+// The slot of a refined point refers to maximal_, of an unrefined one to exposed_. Room in the sets is made
+// first: if that throws, nothing has changed.
 void Grid48Front::on_refined(Index t) {
+  make_room_to_refine();
+  refined_[t] = 1;
+  touched_valid_ = false;
   const Grid48::Family f = grid_->family(t);
   const Index i = slot_[t];
   Entry e;
@@ -1758,7 +1768,7 @@ void Grid48Front::on_coarsened(Index t) {
   }
 }
 
-void Grid48Front::coarsen_unchecked(Index p) {
+inline void Grid48Front::coarsen_unchecked(Index p) {
   if (!sets_valid_) rebuild_sets();
   make_room_to_coarsen();  // may throw: nothing has changed for p yet
   refined_[p] = 0;

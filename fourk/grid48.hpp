@@ -445,22 +445,9 @@ class Grid48Front {
     Index point = kInvalid;
     float z = 0.0f, radius = 0.0f, error = 0.0f;
   };
-  // Invariant: expiry.capacity() >= entry.capacity(), so that room in `entry` is room in both (one test
-  // per set before a move; see make_room). Copies keep it; grow() keeps it even when a reserve throws.
   struct BoundarySet {
     std::vector<Expiry> expiry;  // scanned sequentially by update_view every frame (8 bytes per diamond)
     std::vector<Entry> entry;    // parallel: read for stale diamonds, moved between the sets
-    BoundarySet() = default;
-    BoundarySet(const BoundarySet& other) : entry(other.entry) {
-      expiry.reserve(entry.capacity());
-      expiry.insert(expiry.end(), other.expiry.begin(), other.expiry.end());  // within the reserve
-    }
-    BoundarySet& operator=(const BoundarySet& other) {
-      if (this != &other) *this = BoundarySet(other);
-      return *this;
-    }
-    BoundarySet(BoundarySet&&) noexcept = default;
-    BoundarySet& operator=(BoundarySet&&) noexcept = default;
     std::size_t size() const noexcept { return entry.size(); }
     void clear() noexcept {
       expiry.clear();
@@ -486,36 +473,33 @@ class Grid48Front {
   struct ViewContext;
   Entry entry_of(Index p) const noexcept { return {p, grid_->height_at(p), grid_->radius(p), grid_->error(p)}; }
   void set_add(BoundarySet& s, const Entry& e, Expiry x);
-  // Capacity for `extra` more diamonds in s (or indices in v) without a reallocation, so that on_refined and
-  // on_coarsened, once the refined flags have changed, allocate nothing (the only step that can throw comes
-  // before the move). One comparison per set when there is room (BoundarySet's invariant).
-  static void make_room(BoundarySet& s, std::size_t extra) {
-    if (s.entry.capacity() - s.entry.size() < extra) [[unlikely]]
-      grow(s, extra);
+  // Room in the boundary sets (and the list of diamonds newly added to one, during update_view) for the
+  // diamonds a move adds, so that on_refined and on_coarsened, once the refined flags have changed, allocate
+  // nothing: the only step that can throw comes before the move. on_refined adds a diamond to the maximal
+  // set and up to four children to the exposed set (and to new_exposed_); on_coarsened one diamond to the
+  // exposed set and up to two parents to the maximal set. The tests are inline and branch once; the growth
+  // is out of line.
+  template <class T> static std::size_t spare(const std::vector<T>& v) noexcept { return v.capacity() - v.size(); }
+  static std::size_t spare(const std::vector<Index>* v) noexcept {
+    return v ? v->capacity() - v->size() : std::size_t(-1);
   }
-  static void make_room(std::vector<Index>& v, std::size_t extra) {
-    if (v.capacity() - v.size() < extra) v.reserve(std::max(v.size() + extra, 2 * v.capacity()));
+  static bool lacks_room(const BoundarySet& s, std::size_t extra) noexcept {
+    return (spare(s.entry) < extra) | (spare(s.expiry) < extra);
   }
-  static void grow(BoundarySet& s, std::size_t extra);
-  static std::size_t spare(const BoundarySet& s) noexcept { return s.entry.capacity() - s.entry.size(); }
-  // on_refined adds a diamond to the maximal set and up to four children to the exposed set (and to
-  // new_exposed_); on_coarsened one diamond to the exposed set and up to two parents to the maximal set.
-  // Both sets are tested with one branch.
   void make_room_to_refine() {
-    if ((spare(exposed_) < 4) | (spare(maximal_) < 1)) [[unlikely]] {
-      make_room(exposed_, 4);
-      make_room(maximal_, 1);
-    }
-    if (new_exposed_) make_room(*new_exposed_, 4);
+    if (lacks_room(exposed_, 4) | lacks_room(maximal_, 1) | (spare(new_exposed_) < 4)) [[unlikely]]
+      make_room(4, 1, new_exposed_, 4);
   }
   void make_room_to_coarsen() {
-    if ((spare(exposed_) < 1) | (spare(maximal_) < 2)) [[unlikely]] {
-      make_room(exposed_, 1);
-      make_room(maximal_, 2);
-    }
-    if (new_maximal_) make_room(*new_maximal_, 2);
+    if (lacks_room(exposed_, 1) | lacks_room(maximal_, 2) | (spare(new_maximal_) < 2)) [[unlikely]]
+      make_room(1, 2, new_maximal_, 2);
   }
-  void set_remove(BoundarySet& s, Index p);
+  void make_room(std::size_t exposed, std::size_t maximal, std::vector<Index>* added, std::size_t listed);
+  // Room for `extra` more diamonds in s.
+  static void make_room(BoundarySet& s, std::size_t extra);
+  // Forced inline (defined in grid48.cpp, used only there), as family() is: grid48.cpp reaches GCC's
+  // inline-unit-growth limit, and which hot call it then leaves out of line shifts with any change.
+  [[gnu::always_inline]] inline void set_remove(BoundarySet& s, Index p);
   void rebuild_sets();
   // The boundary computed from refined_ alone, read-only: exposed(p) and maximal(p) for each diamond of
   // the two sets, in no particular order. O(touched) from the touched list when touched_valid_ and the
@@ -525,7 +509,7 @@ class Grid48Front {
   TriMesh to_mesh_with(Index* remap, std::vector<Index>* lattice_ids) const;
   void on_refined(Index t);
   void on_coarsened(Index t);
-  void coarsen_unchecked(Index p);
+  [[gnu::always_inline]] inline void coarsen_unchecked(Index p);
   QueryStats update_view_unguarded(const ViewQuery& v);
   std::size_t scan_stale(BoundarySet& s, const ViewContext& cx, bool pick, std::vector<Index>& out);
   void prefetch_refine(Index p) const;
@@ -605,7 +589,8 @@ void Grid48::for_each_child(Index p, Fn&& fn) const {
   }
 }
 
-inline Grid48::Family Grid48::family(Index p) const noexcept {
+// Forced inline: refine() and the boundary updates call it once per move (see Grid48Front::set_remove).
+[[gnu::always_inline]] inline Grid48::Family Grid48::family(Index p) const noexcept {
   VARMESH_ASSERT(p < num_points() && is_node(p));
   Family f;
   const std::uint32_t w = static_cast<std::uint32_t>(lw_), h = static_cast<std::uint32_t>(lh_);
@@ -731,10 +716,7 @@ void Grid48Front::refine(Index p, Sink&& sink) {
     }
     if (!pushed) {
       stack_.pop_back();
-      make_room_to_refine();  // may throw: nothing has changed for t yet
-      refined_[t] = 1;
-      touched_valid_ = false;
-      on_refined(t);
+      on_refined(t);  // marks t refined (if it throws, nothing has changed)
       ++num_refined_;
       num_faces_ += static_cast<std::size_t>(grid_->num_triangles(t));
       sink(t);
