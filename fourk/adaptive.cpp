@@ -40,15 +40,9 @@ constexpr int kMaxLevel = 48;
 // Error given to a sample whose distance to an implicit surface could not be measured: refine it.
 constexpr double kUnmeasured = 1e30;
 // Implicit surfaces: a face whose normal is further than this from the gradient of f at its centroid is split
-// while its longest edge exceeds kFoldEdgeFraction times the tolerance (a fold guard; see
-// ImplicitRefiner::is_folded). 45 degrees: coarse faces of a well-polygonized surface stay below it (the
-// torus's base faces that span a third of the tube reach 43), a back-facing fold is beyond 90. At 60 the
-// 4 x 4 x 2 torus kept a groove where the planes x = +-y meet the top of the hole (faces 51.6 degrees off at
-// tolerance 0.046). Half the tolerance: at the full tolerance, splitting a face just longer than it could
-// leave children shorter than it and further off than their parent (70 degrees on the genus-2 surface of
-// the tests at 0.2, from a parent at 51).
-constexpr double kMaxNormalDeviation = std::numbers::pi / 4.0;
-constexpr double kFoldEdgeFraction = 0.5;
+// (a fold guard; see ImplicitRefiner::is_folded). 60 degrees: coarse faces of a well-polygonized surface stay
+// below 45 (the torus's base faces that span a third of the tube reach 43), a back-facing fold is beyond 90.
+constexpr double kMaxNormalDeviation = std::numbers::pi / 3.0;
 // polygonize_freudenthal: a grid vertex with a root closer than this fraction of the edge's length moves onto
 // the root (see there). Labelle and Shewchuk snap at up to about a quarter of an edge on their lattice.
 constexpr double kSnapFraction = 0.2;
@@ -572,16 +566,15 @@ class ImplicitRefiner final : public Refiner {
 
   // The distance test cannot see a fold: a face standing across the surface (in the plane of a meridian of the
   // torus, say) keeps all its points close to the surface. So a face whose normal is more than
-  // kMaxNormalDeviation from the gradient at its centroid is split too, while its longest edge exceeds
-  // kFoldEdgeFraction times the tolerance: a fold from a projected midpoint (the sagitta of a long chord
-  // exceeding the face's width) goes away as the faces shrink, a face turned over in the surface's tangent
-  // plane (a base that does not resolve the surface) never does, and the bound on edge lengths keeps its
-  // refinement finite, about (area / (kFoldEdgeFraction tolerance)^2) faces. side_ is +1 when the base's
-  // normals point towards f > 0, -1 when towards f < 0.
+  // kMaxNormalDeviation from the gradient at its centroid is split too, while its longest edge exceeds the
+  // tolerance: a fold from a projected midpoint (the sagitta of a long chord exceeding the face's width) goes
+  // away as the faces shrink, a face turned over in the surface's tangent plane (a base that does not resolve
+  // the surface) never does, and the bound on edge lengths keeps its refinement finite, about (area /
+  // tolerance^2) faces. side_ is +1 when the base's normals point towards f > 0, -1 when towards f < 0.
   bool is_folded(VertexId a, VertexId b, VertexId c) override {
     const glm::dvec3 pa(positions_[a]), pb(positions_[b]), pc(positions_[c]);
     const double longest = std::max({glm::length(pb - pa), glm::length(pc - pb), glm::length(pa - pc)});
-    if (!(longest > kFoldEdgeFraction * double(options_.tolerance))) return false;
+    if (!(longest > double(options_.tolerance))) return false;
     const glm::dvec3 g = field_.gradient((pa + pb + pc) / 3.0);
     const double len = glm::length(g);
     if (!(len > 0.0)) return false;  // no normal to compare with (a critical point of f)

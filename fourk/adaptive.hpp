@@ -47,29 +47,23 @@
 ///   surface; when Newton fails, a sign change along the face normal is searched; when both fail, the point
 ///   counts as out of tolerance). Distances cannot see a fold (a face standing across the surface, in the
 ///   plane of a meridian of the torus, keeps its points near it), so a face is also split, whatever its error,
-///   when its normal is more than 45 degrees from the gradient of f at its centroid and its longest edge is
-///   longer than half the tolerance (the fold guard; AdaptiveHierarchy::num_folded_faces counts these faces).
-///   Such folds come from bisecting a long chord whose sagitta exceeds the face's width and go away as faces
+///   when its normal is more than 60 degrees from the gradient of f at its centroid and its longest edge is
+///   longer than the tolerance (the fold guard; AdaptiveHierarchy::num_folded_faces counts these faces). Such
+///   folds come from bisecting a long chord whose sagitta exceeds the face's width and go away as faces
 ///   shrink; the edge bound keeps the refinement finite where they do not (a base that does not resolve the
-///   surface, whose faces are turned over in its tangent plane). 45 degrees lies just above the deviation of a
-///   coarse but sound face (the torus's base faces that span a third of its tube reach 43) and well below a
-///   face seen from behind (90); half the tolerance, because a split can leave children shorter than the
-///   tolerance and further off than their parent. The error of a face split by the guard alone stays its
-///   distance error. Measured on the finest fronts of the tests (torus_implicit() on 4 x 4 x 2 and 6 x 6 x 3
-///   grids, a sphere, a genus-2 surface on 24 x 18 x 8 and 16 x 12 x 5 grids; tolerances 0.2 to 0.005):
-///   every normal within 49.1 degrees of the gradient (60 degrees: 59.7, and 51.6 on the 4 x 4 x 2 torus
-///   at 0.046, a groove where the planes x = +-y meet the top of the hole; now 24.3 there), for 0.1-0.4% more
-///   faces on the tori, 3% on the fine genus-2 grid and 18% on the coarse one, whose needles fold.
+///   surface, whose faces are turned over in its tangent plane). 60 degrees lies between the deviation of a
+///   coarse but sound face (the torus's base faces that span a third of its tube reach 43) and a face seen from
+///   behind (90). The error of a face split by the guard alone stays its distance error.
 /// An MT node's error is the largest error of its pre-image faces (MtBuilder then saturates it). So
 /// extract() with Criterion::object_error(e), e >= tolerance, gives a mesh whose faces all have error <= e,
 /// and every face of the finest front has error <= tolerance (implicit surfaces: and, when its longest edge is
-/// longer than half the tolerance, a normal within 45 degrees of the gradient). Between sample points nothing
-/// is guaranteed.
+/// longer than the tolerance, a normal within 60 degrees of the gradient). Between sample points nothing is
+/// guaranteed.
 ///
 /// Figure 20 counts (tests/fourk/adaptive_test.cpp, default sample_order 4): torus_parametric() at tolerance
 /// 0.0685 gives 528 finest triangles (the paper shows 516; the count jumps 464 -> 528 between 0.069 and
 /// 0.068 because the torus is refined ring by ring); torus_implicit() at 0.041 gives 1322 (paper: 1324) from
-/// a 144-face base (at 0.046, the tolerance chosen before grid vertices were snapped, 1096). The paper does not
+/// a 144-face base (at 0.046, the tolerance chosen before grid vertices were snapped, 1088). The paper does not
 /// state its tolerances, so these were chosen to match the counts.
 ///
 /// Result invariants (AdaptiveHierarchy): mt passes Mt::validate(); every node except the source is a
