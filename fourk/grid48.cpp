@@ -1505,6 +1505,9 @@ void Grid48Front::prefetch_coarsen(Index p) const {
 
 QueryStats Grid48Front::update_view(const ViewQuery& v) {
   v.validate();
+  // The motion between frames reads the view matrices: one that overflows float (eye and target ~1e19
+  // apart) is refused here, before anything changes, rather than by the next frame.
+  static_cast<void>(v.camera.view());
   try {
     return update_view_unguarded(v);
   } catch (...) {

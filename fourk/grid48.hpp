@@ -358,7 +358,7 @@ class Grid48Front {
   /// field of view, aspect, clipping distances or object error change, it re-evaluates everything. A
   /// diamond the update refines (coarsens) because it is (not) wanted keeps its record in its new set.
   /// Costs 24 bytes per boundary diamond (the record and a copy of the diamond's bound) and 4 per lattice
-  /// point. Throws InvalidInput as v.validate() (checked before the front changes).
+  /// point. Throws InvalidInput as v.validate() and v.camera.view() (checked before the front changes).
   QueryStats update_view(const ViewQuery& v);
   /// Calls fn(apex, h0, h1) (lattice points, counter-clockwise) for every current triangle, unclipped.
   template <class Fn> void for_each_triangle(Fn&& fn) const;

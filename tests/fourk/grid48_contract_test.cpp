@@ -254,6 +254,15 @@ TEST(Grid48Contract, UpdateViewChecksTheViewAsToQueryDoes) {
     EXPECT_THROW(fr.update_view(bad[i]), InvalidInput) << i;
     EXPECT_EQ(fr.num_faces(), faces) << "the front changed on a refused view " << i;
   }
+  // A camera whose view matrix overflows float (eye and target 1e20 apart) is refused on its first frame,
+  // not on the frame after it (which compares two view matrices).
+  ViewQuery far = good;
+  far.camera.eye = {-1e20f, -1e20f, 30.0f};
+  EXPECT_THROW(static_cast<void>(far.camera.view()), InvalidInput);
+  for (int frame = 0; frame < 2; ++frame) {
+    EXPECT_THROW(fr.update_view(far), InvalidInput) << frame;
+    EXPECT_EQ(fr.num_faces(), faces) << frame;
+  }
   fr.validate();
   // Still coherent with the last good view.
   Grid48Front ref(g);
