@@ -9,12 +9,21 @@
 // Allocation guard: while armed, any single allocation above the limit fails with bad_alloc (and is
 // remembered), so "never allocate from an absurd count" is checked as a property instead of showing up as
 // an out-of-memory kill or a multi-gigabyte memset. Unarmed, these are plain malloc/free.
+//
+// Countdown: while g_countdown > 0, each allocation counts it down, and the one that brings it to 0 fails
+// (then it stays 0: one failure per setting), so a test can fail the 1st, 2nd, ... allocation of an
+// operation in turn.
 namespace {
 std::atomic<bool> g_guard_armed{false};
 std::atomic<std::size_t> g_guard_peak{0};
+std::atomic<long> g_countdown{0};
 constexpr std::size_t kGuardLimit = std::size_t{1} << 20;
 
 void* guarded_alloc(std::size_t n) noexcept {
+  if (const long c = g_countdown.load(std::memory_order_relaxed); c > 0) {
+    g_countdown.store(c - 1, std::memory_order_relaxed);
+    if (c == 1) return nullptr;
+  }
   if (g_guard_armed.load(std::memory_order_relaxed)) {
     std::size_t peak = g_guard_peak.load(std::memory_order_relaxed);
     while (n > peak && !g_guard_peak.compare_exchange_weak(peak, n)) {

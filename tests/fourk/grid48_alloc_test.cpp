@@ -3,7 +3,7 @@
 // boundary of its refined set as candidates, keep the state its contract promises (unchanged, the base mesh,
 // or stopped between two moves), and then reach the same fronts as a front that never failed.
 //
-// Own executable: this file replaces the global operator new and delete (the countdown below).
+// Own executable: tests/alloc_guard.hpp replaces the global operator new and delete (its countdown).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,45 +21,7 @@
 #include "multitri/query.hpp"
 #include "multitri/terrain_gen.hpp"
 
-namespace {
-// > 0: the allocation that brings it to 0 fails (then it stays 0: one failure per arming).
-std::atomic<long> g_countdown{0};
-
-void* counted_alloc(std::size_t n) noexcept {
-  const long c = g_countdown.load(std::memory_order_relaxed);
-  if (c > 0) {
-    g_countdown.store(c - 1, std::memory_order_relaxed);
-    if (c == 1) return nullptr;
-  }
-  return std::malloc(n == 0 ? 1 : n);
-}
-}  // namespace
-
-// GCC sees the std::free of a pointer that came from operator new once these are inlined into the standard
-// allocators; that pairing is exactly what a replacement does.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-void* operator new(std::size_t n) {
-  if (void* p = counted_alloc(n)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  if (void* p = counted_alloc(n)) return p;
-  throw std::bad_alloc();
-}
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return counted_alloc(n); }
-void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return counted_alloc(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
-void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
+#include "alloc_guard.hpp"  // replaces operator new for this executable; its countdown fails the n-th allocation
 
 namespace varmesh {
 namespace {
