@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "fourk/grid48.hpp"
+#include "grid48_boundary.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/query.hpp"
 #include "multitri/terrain_gen.hpp"
@@ -33,29 +34,7 @@ std::vector<Index> refined_set(const Grid48Front& fr) {
   return out;
 }
 
-// The exposed and maximal diamonds by definition, from is_refined alone, against the candidate listings.
-void expect_candidates_by_definition(const Grid48Front& fr) {
-  const Grid48& g = fr.grid();
-  std::vector<Index> exposed, maximal, listed_exposed, listed_maximal;
-  for (Index p = 0; p < g.num_points(); ++p) {
-    if (!g.is_node(p)) continue;
-    if (fr.is_refined(p)) {
-      bool leaf = true;
-      g.for_each_child(p, [&](Index c) { leaf = leaf && !fr.is_refined(c); });
-      if (leaf) maximal.push_back(p);
-    } else {
-      bool any = g.level(p) == 0;
-      g.for_each_parent(p, [&](Index q) { any = any || fr.is_refined(q); });
-      if (any) exposed.push_back(p);
-    }
-  }
-  fr.for_each_refine_candidate([&](Index p) { listed_exposed.push_back(p); });
-  fr.for_each_coarsen_candidate([&](Index p) { listed_maximal.push_back(p); });
-  std::sort(listed_exposed.begin(), listed_exposed.end());
-  std::sort(listed_maximal.begin(), listed_maximal.end());
-  EXPECT_EQ(listed_exposed, exposed);
-  EXPECT_EQ(listed_maximal, maximal);
-}
+using testing::expect_candidates_by_definition;
 
 void expect_same_front(const Grid48Front& a, const Grid48Front& b) {
   EXPECT_EQ(a.num_faces(), b.num_faces());

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "fourk/grid48.hpp"
+#include "grid48_boundary.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/heightfield.hpp"
 #include "multitri/query.hpp"
@@ -113,35 +114,7 @@ TEST(Grid48Contract, ThrowingCriterionOrSinkLeavesGenericMovesValid) {
   EXPECT_EQ(fr.num_refined(), 1u);
 }
 
-// The exposed and maximal diamonds by definition, from is_refined alone.
-void boundary_by_definition(const Grid48Front& fr, std::vector<Index>& exposed, std::vector<Index>& maximal) {
-  const Grid48& g = fr.grid();
-  exposed.clear();
-  maximal.clear();
-  for (Index p = 0; p < g.num_points(); ++p) {
-    if (!g.is_node(p)) continue;
-    if (fr.is_refined(p)) {
-      bool leaf = true;
-      g.for_each_child(p, [&](Index c) { leaf = leaf && !fr.is_refined(c); });
-      if (leaf) maximal.push_back(p);
-    } else {
-      bool any = g.level(p) == 0;
-      g.for_each_parent(p, [&](Index q) { any = any || fr.is_refined(q); });
-      if (any) exposed.push_back(p);
-    }
-  }
-}
-
-void expect_candidates_by_definition(const Grid48Front& fr, const char* what) {
-  std::vector<Index> exposed, maximal, listed_exposed, listed_maximal;
-  boundary_by_definition(fr, exposed, maximal);
-  fr.for_each_refine_candidate([&](Index p) { listed_exposed.push_back(p); });
-  fr.for_each_coarsen_candidate([&](Index p) { listed_maximal.push_back(p); });
-  std::sort(listed_exposed.begin(), listed_exposed.end());
-  std::sort(listed_maximal.begin(), listed_maximal.end());
-  EXPECT_EQ(listed_exposed, exposed) << what;
-  EXPECT_EQ(listed_maximal, maximal) << what;
-}
+using testing::expect_candidates_by_definition;
 
 TEST(Grid48Contract, CandidateListingsMatchTheDefinitionInEveryState) {
   const HeightField f = make_fractal_terrain(129, 97, 3);
