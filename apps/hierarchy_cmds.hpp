@@ -53,6 +53,8 @@ struct PmBuildArgs {
   bool lt_finish_given = false;   ///< --lt-finish on the command line (refused where it cannot apply)
   bool colors = false;            ///< GH98 colour quadrics when the mesh has vertex colours
   std::string non_manifold = "split";  ///< split | lock
+  std::size_t threads = 1;        ///< QemOptions::threads (0: one per hardware thread)
+  bool threads_given = false;     ///< --threads on the command line (refused where it cannot apply)
   bool measure = false;           ///< report the distance from the input's vertices to the base mesh
   bool quiet = false;
 };

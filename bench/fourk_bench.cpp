@@ -16,7 +16,7 @@
 //     same MtFront object, which extract() resets: reset is timed), each run over whole orbits on its own
 //     front; per frame the two face sets are compared (count and an order-independent hash).
 //
-// Times: CPU time of the thread (CLOCK_THREAD_CPUTIME_ID; everything timed is single-threaded) and wall time.
+// Times: CPU time of the process (CLOCK_PROCESS_CPUTIME_ID; everything timed is single-threaded) and wall time.
 //
 // usage: varmesh_fourk_bench [--mesh FILE] [--levels L] [--reps N] [--frames K] [--orbit-faces F]
 //                            [--cow FILE|none]
@@ -53,7 +53,7 @@ namespace {
 using bench::Lap;
 using bench::seconds_since;
 using bench::Stopwatch;
-using bench::thread_cpu_seconds;
+using bench::process_cpu_seconds;
 
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;

@@ -18,10 +18,13 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <span>
 #include <string>
+#include <thread>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -127,6 +130,57 @@ class LtConstraints {
   int n_ = 0;
 };
 
+// A leaf's bound: the sphere around pv of radius sqrt(r2) (the largest squared distance to a corner of its
+// faces), and the cone of its faces' unit normals normal_at(0 .. count - 1) (w = 1 for a face of nonzero
+// area, 0 otherwise).
+template <class NormalAt>
+ElementBound leaf_bound(const glm::vec3& pv, double r2, Index count, NormalAt&& normal_at) {
+  glm::vec3 sum(0.0f);
+  float weight = 0.0f;
+  for (Index i = 0; i < count; ++i) {
+    const glm::vec4 u = normal_at(i);
+    sum += glm::vec3(u);
+    weight += u.w;
+  }
+  // The normal cone without trigonometry: the normals are points of the unit sphere, and a ball that holds
+  // them cuts off a cap that holds them. A ball grown from their centroid one normal at a time (Ritter) gives
+  // the axis; the farthest normal from the axis gives the exact half-angle. Full when that normal is 90
+  // degrees or more away, or when there is no normal at all.
+  NormalCone cone;
+  if (weight > 0.0f) {
+    glm::vec3 c = sum / weight;
+    float r = 0.0f;
+    for (Index i = 0; i < count; ++i) {
+      const glm::vec4 u = normal_at(i);
+      if (u.w == 0.0f) continue;
+      const glm::vec3 d = glm::vec3(u) - c;
+      const float dd = glm::dot(d, d);
+      if (dd <= r * r) continue;
+      const float dl = std::sqrt(dd), grown = 0.5f * (r + dl);
+      c += d * ((grown - r) / dl);
+      r = grown;
+    }
+    if (const float cl = glm::length(c); cl > 0.0f) {
+      const glm::vec3 axis = c / cl;
+      float lo = 1.0f;
+      for (Index i = 0; i < count; ++i) {
+        const glm::vec4 u = normal_at(i);
+        if (u.w != 0.0f) lo = std::min(lo, glm::dot(axis, glm::vec3(u)));
+      }
+      if (lo > 2e-6f) cone = {axis, lo - 1e-6f};
+    }
+  }
+  // Rounded up: a radius rounded down to float can miss its farthest corner (in subnormal steps at 1e-40).
+  return ElementBound{pv, std::nextafter(static_cast<float>(std::sqrt(r2)), std::numeric_limits<float>::infinity()), 0.0f, cone};
+}
+
+// A face's unit normal from its corners, w = 1; all 0 for a face of zero area.
+glm::vec4 unit_normal(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+  const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
+  const float len = glm::length(n);
+  return len > 0.0f ? glm::vec4(n / len, 1.0f) : glm::vec4(0.0f);
+}
+
 // Distance from q to the segment [s0, s1].
 double segment_distance(const glm::dvec3& q, const glm::dvec3& s0, const glm::dvec3& s1) noexcept {
   const glm::dvec3 d = s1 - s0;
@@ -152,6 +206,7 @@ class Analysis {
   VertexHierarchy run(QemStats& stats);
 
  private:
+  struct Part;
   // Variable-arity relation per node (faces around it, candidate edges at it): a run of a pool. A new node's
   // run is appended; the runs of dead nodes are left behind (no allocation per collapse).
   struct Run {
@@ -251,10 +306,19 @@ class Analysis {
   Verdict check(Index a, Index b, const glm::dvec3& p, Step& st);
   double border_deviation(Index a, Index b, const glm::dvec3& p) const;
   void collapse(Index a, Index b, const Placement& pl, const Step& st);
-  void init_faces();
+  void init_state();  // the per-slot and per-face arrays for nl_ slots and nf_ faces, all alive
+  void init_faces();  // the runs of the live faces and their normals
   void init_quadrics();
+  // The border test and, on a border vertex, its quadric summed again with the border planes, from v's faces
+  // in face order (count of them at `faces`); the scratch buffers hold at least `count` entries.
+  void border_quadric(Index v, const Index* faces, Index count, Index* after_buf, Index* before_buf);
   void init_edges();
+  void init_raw();          // the raw hierarchy's leaves (positions, colours; bounds sized)
   void init_leaf_bounds();  // after init_edges(): reads the edge runs
+  void collapse_loop(QemStats& stats);
+  // Parallel analysis (QemOptions::threads): the number of parts to use (1: serial), and the run of them.
+  std::size_t parallel_parts() const;
+  void run_parts(std::size_t parts, QemStats& stats);
 
   ManifoldInput in_;
   QemOptions opt_;
@@ -304,6 +368,9 @@ class Analysis {
 
   VertexHierarchyBuilder::Raw raw_;
   std::vector<double> uerr_;  // per node, unit coordinates (per slot too)
+  // Added to alive_vertices_ in the depth budget's count of roots: in a part of a parallel analysis, the
+  // vertices of the other parts (see run_parts()).
+  std::size_t alive_bias_ = 0;
 };
 
 // Each branch returns its own prvalue: built in place in the caller's object, with no copy through a local
@@ -498,7 +565,8 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
   // (at most the vertices after this collapse) must fit in 64, or finish() refuses the whole hierarchy.
   {
     const int height = std::max(height_[a], height_[b]) + 1;
-    const int tree_bits = alive_vertices_ > 2 ? static_cast<int>(std::bit_width(alive_vertices_ - 2)) : 0;
+    const std::size_t roots = alive_vertices_ + alive_bias_;
+    const int tree_bits = roots > 2 ? static_cast<int>(std::bit_width(roots - 2)) : 0;
     if (height > opt_.max_depth || height > 63 - tree_bits) return Verdict::kDepth;
   }
   // Faces on the edge: fl has a->b, fr has b->a (from a's point of view; swapped later as needed).
@@ -811,9 +879,11 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
 }
 
 void Analysis::init_faces() {
-  // Faces around each leaf, in face order.
+  // Faces around each slot, in face order (all faces are alive but after the parts of a parallel analysis).
   fadj_.assign(nl_, Run{});
-  for (Index c : cur_) ++fadj_[c].cnt;
+  for (std::size_t f = 0; f < nf_; ++f)
+    if (alive_[f])
+      for (int k = 0; k < 3; ++k) ++fadj_[cur_[3 * f + k]].cnt;
   Index off = 0;
   for (Run& r : fadj_) {
     r.off = off;
@@ -823,16 +893,19 @@ void Analysis::init_faces() {
   // Room for the runs of the new nodes: each collapse appends about one degree's worth.
   fpool_.reserve(2 * cur_.size());
   fpool_.resize(cur_.size());
-  for (std::size_t f = 0; f < nf_; ++f)
+  for (std::size_t f = 0; f < nf_; ++f) {
+    if (!alive_[f]) continue;
     for (int k = 0; k < 3; ++k) {
       Run& r = fadj_[cur_[3 * f + k]];
       fpool_[r.off + r.cnt++] = static_cast<Index>(f);
     }
+  }
   // Unit normals from the corners (0 for a degenerate face), and Lindstrom-Turk's planes from the same
   // unnormalised normal.
   fnormal_.resize(nf_);
   if (lt_) fplane_.resize(nf_);
   for (std::size_t f = 0; f < nf_; ++f) {
+    if (!alive_[f]) continue;
     const glm::dvec3& p0 = geo_[cur_[3 * f]].p;
     const glm::dvec3 n = glm::cross(geo_[cur_[3 * f + 1]].p - p0, geo_[cur_[3 * f + 2]].p - p0);
     const double len = glm::length(n);
@@ -909,119 +982,381 @@ void Analysis::init_quadrics() {
       geo_[c2].q += q;
     }
   }
-  auto border_quadric = [&](Index x, Index y, Index z) {
-    return Quadric::from_border_edge(geo_[x].p, geo_[y].p, geo_[z].p, opt_.border_penalty);
-  };
   // Per face of v: the corners after and before v, in buffers as long as the longest run.
   Index most = 0;
   for (const Run& r : fadj_) most = std::max(most, r.cnt);
   std::vector<Index> after_buf(most), before_buf(most);
-  for (Index v = 0; v < nl_; ++v) {
-    const std::span<Index> after(after_buf.data(), fadj_[v].cnt), before(before_buf.data(), fadj_[v].cnt);
-    for (Index i = 0; i < fadj_[v].cnt; ++i) {
-      const Index* c = &cur_[3 * faces_begin(v)[i]];
-      const int j = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
-      after[i] = c[(j + 1) % 3];
-      before[i] = c[(j + 2) % 3];
-    }
-    // An open fan has an edge leaving v with no twin: a corner after v that is before v in no face.
-    ++stamp_;
-    for (const Index w : before) mark_[w] = stamp_;
-    bool border = false;
-    for (const Index w : after) border |= mark_[w] != stamp_;
-    if (!border) continue;
-    border_[v] = 1;
-    Quadric q;
-    AttributeQuadric aq;
-    for (std::size_t i = 0; i < after.size(); ++i) {
-      const Index* c = &cur_[3 * faces_begin(v)[i]];
-      if (colors_) {
-        aq += AttributeQuadric::from_triangle({geo_[c[0]].p, ucol_[c[0]]}, {geo_[c[1]].p, ucol_[c[1]]},
-                                              {geo_[c[2]].p, ucol_[c[2]]});
-      } else {
-        q += Quadric::from_triangle(geo_[c[0]].p, geo_[c[1]].p, geo_[c[2]].p);
-      }
-      const Index next = after[i], prev = before[i];
-      const bool out = std::find(before.begin(), before.end(), next) == before.end();  // v -> next
-      const bool in = std::find(after.begin(), after.end(), prev) == after.end();     // prev -> v
-      // Corner order: v -> next is edge j of the face, prev -> v edge j + 2 (mod 3), so v -> next comes
-      // first only when v is corner 0.
-      const bool out_first = c[0] == v;
-      for (int pass = 0; pass < 2; ++pass) {
-        const bool is_out = (pass == 0) == out_first;
-        if (is_out ? !out : !in) continue;
-        const Quadric bq = is_out ? border_quadric(v, next, prev) : border_quadric(prev, v, next);
-        if (colors_) {
-          // Border planes constrain position only: embed the 3x3 part in the 6x6 quadric.
-          AttributeQuadric e;
-          const double m[3][3] = {{bq.a00, bq.a01, bq.a02}, {bq.a01, bq.a11, bq.a12}, {bq.a02, bq.a12, bq.a22}};
-          std::size_t idx = 0;
-          for (int r = 0; r < 6; ++r)
-            for (int k = r; k < 6; ++k, ++idx) e.a[idx] = (r < 3 && k < 3) ? m[r][k] : 0.0;
-          e.b = {bq.b0, bq.b1, bq.b2, 0, 0, 0};
-          e.c = bq.c;
-          aq += e;
-        } else {
-          q += bq;
-        }
-      }
-    }
-    if (colors_) aq_[v] = aq; else geo_[v].q = q;
+  for (Index v = 0; v < nl_; ++v) border_quadric(v, faces_begin(v), fadj_[v].cnt, after_buf.data(), before_buf.data());
+}
+
+void Analysis::border_quadric(Index v, const Index* faces, Index count, Index* after_buf, Index* before_buf) {
+  auto plane = [&](Index x, Index y, Index z) {
+    return Quadric::from_border_edge(geo_[x].p, geo_[y].p, geo_[z].p, opt_.border_penalty);
+  };
+  const std::span<Index> after(after_buf, count), before(before_buf, count);
+  for (Index i = 0; i < count; ++i) {
+    const Index* c = &cur_[3 * faces[i]];
+    const int j = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+    after[i] = c[(j + 1) % 3];
+    before[i] = c[(j + 2) % 3];
   }
+  // An open fan has an edge leaving v with no twin: a corner after v that is before v in no face.
+  ++stamp_;
+  for (const Index w : before) mark_[w] = stamp_;
+  bool border = false;
+  for (const Index w : after) border |= mark_[w] != stamp_;
+  if (!border) return;
+  border_[v] = 1;
+  Quadric q;
+  AttributeQuadric aq;
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    const Index* c = &cur_[3 * faces[i]];
+    if (colors_) {
+      aq += AttributeQuadric::from_triangle({geo_[c[0]].p, ucol_[c[0]]}, {geo_[c[1]].p, ucol_[c[1]]},
+                                            {geo_[c[2]].p, ucol_[c[2]]});
+    } else {
+      q += Quadric::from_triangle(geo_[c[0]].p, geo_[c[1]].p, geo_[c[2]].p);
+    }
+    const Index next = after[i], prev = before[i];
+    const bool out = std::find(before.begin(), before.end(), next) == before.end();  // v -> next
+    const bool in = std::find(after.begin(), after.end(), prev) == after.end();     // prev -> v
+    // Corner order: v -> next is edge j of the face, prev -> v edge j + 2 (mod 3), so v -> next comes
+    // first only when v is corner 0.
+    const bool out_first = c[0] == v;
+    for (int pass = 0; pass < 2; ++pass) {
+      const bool is_out = (pass == 0) == out_first;
+      if (is_out ? !out : !in) continue;
+      const Quadric bq = is_out ? plane(v, next, prev) : plane(prev, v, next);
+      if (colors_) {
+        // Border planes constrain position only: embed the 3x3 part in the 6x6 quadric.
+        AttributeQuadric e;
+        const double m[3][3] = {{bq.a00, bq.a01, bq.a02}, {bq.a01, bq.a11, bq.a12}, {bq.a02, bq.a12, bq.a22}};
+        std::size_t idx = 0;
+        for (int r = 0; r < 6; ++r)
+          for (int k = r; k < 6; ++k, ++idx) e.a[idx] = (r < 3 && k < 3) ? m[r][k] : 0.0;
+        e.b = {bq.b0, bq.b1, bq.b2, 0, 0, 0};
+        e.c = bq.c;
+        aq += e;
+      } else {
+        q += bq;
+      }
+    }
+  }
+  if (colors_) aq_[v] = aq; else geo_[v].q = q;
 }
 
 void Analysis::init_leaf_bounds() {
   // Leaf bounds: the sphere around the vertex through its faces' corners (the largest squared distance,
   // one root) and the cone of its faces' unit normals.
   std::vector<glm::vec4> unit(nf_);  // per face: unit normal, w = 1 for a face of nonzero area
-  for (std::size_t f = 0; f < nf_; ++f) {
-    const glm::vec3 p0 = in_.positions[cur_[3 * f]], p1 = in_.positions[cur_[3 * f + 1]], p2 = in_.positions[cur_[3 * f + 2]];
-    const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
-    const float len = glm::length(n);
-    unit[f] = len > 0.0f ? glm::vec4(n / len, 1.0f) : glm::vec4(0.0f);
-  }
+  for (std::size_t f = 0; f < nf_; ++f)
+    unit[f] = unit_normal(in_.positions[cur_[3 * f]], in_.positions[cur_[3 * f + 1]], in_.positions[cur_[3 * f + 2]]);
   for (Index v = 0; v < nl_; ++v) {
     const glm::vec3 pv = in_.positions[v];
     double r2 = 0.0;  // in double: |d|^2 overflows float for edges past ~1.8e19
-    glm::vec3 sum(0.0f);
-    float count = 0.0f;
     // The corners of v's faces other than v are its neighbours, each met once here.
     for (const EdgeRef* e = edges_begin(v); e != edges_end(v); ++e) {
       const glm::dvec3 d = glm::dvec3(in_.positions[e->to]) - glm::dvec3(pv);
       r2 = std::max(r2, glm::dot(d, d));
     }
-    for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-      sum += glm::vec3(unit[*it]);
-      count += unit[*it].w;
-    }
-    // The normal cone without trigonometry: the normals are points of the unit sphere, and a ball that
-    // holds them cuts off a cap that holds them. A ball grown from their centroid one normal at a time
-    // (Ritter) gives the axis; the farthest normal from the axis gives the exact half-angle. Full when
-    // that normal is 90 degrees or more away, or when there is no normal at all.
-    NormalCone cone;
-    if (count > 0.0f) {
-      glm::vec3 c = sum / count;
-      float r = 0.0f;
-      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-        if (unit[*it].w == 0.0f) continue;
-        const glm::vec3 d = glm::vec3(unit[*it]) - c;
-        const float dd = glm::dot(d, d);
-        if (dd <= r * r) continue;
-        const float dl = std::sqrt(dd), grown = 0.5f * (r + dl);
-        c += d * ((grown - r) / dl);
-        r = grown;
-      }
-      if (const float cl = glm::length(c); cl > 0.0f) {
-        const glm::vec3 axis = c / cl;
-        float lo = 1.0f;
-        for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
-          if (unit[*it].w != 0.0f) lo = std::min(lo, glm::dot(axis, glm::vec3(unit[*it])));
-        if (lo > 2e-6f) cone = {axis, lo - 1e-6f};
-      }
-    }
-    // Rounded up: a radius rounded down to float can miss its farthest corner (in subnormal steps at 1e-40).
-    raw_.bounds[v] = ElementBound{pv, std::nextafter(static_cast<float>(std::sqrt(r2)), std::numeric_limits<float>::infinity()), 0.0f, cone};
+    const Index* faces = faces_begin(v);
+    raw_.bounds[v] = leaf_bound(pv, r2, fadj_[v].cnt, [&](Index i) { return unit[faces[i]]; });
   }
+}
+
+// Parallel analysis (QemOptions::threads). The faces are split into parts of about equal size by median cuts
+// of their centroids along the longest axis. A seam vertex has faces in two parts or more; the band is the
+// seam and its neighbours. Each part is simplified on its own, in its own thread, as a whole analysis of its
+// faces with the band locked, down to its share of the targets: a collapse there joins two vertices none of
+// whose neighbours is a seam vertex, so it changes only the faces, neighbours and edges of its own part, and
+// the collapses of different parts commute (each sees the same 1-rings in either order). Their records
+// are then numbered part after part, as if the parts had run one after another, and the whole mesh goes on
+// from there with the serial loop (the band first among what is left, then the targets, the Lindstrom-Turk
+// finish and the smallest base mesh as in a serial run). A part's leaves keep the whole mesh's unit
+// coordinates, quadrics and bounds: those of a vertex that is not on the seam depend only on its own faces,
+// which are all in its part, and are summed in the same order; the seam vertices' are computed on the whole.
+struct Analysis::Part {
+  std::vector<Index> faces;  // the part's faces (ids of the whole), ascending
+  std::vector<Index> l2g;    // part slot -> slot of the whole
+  std::vector<Index> seam;   // the seam vertices of its faces, ascending: slots own, own + 1, ...
+  std::size_t own = 0;       // its vertices not on the seam: slots 0 .. own - 1, in their order
+  std::unique_ptr<Analysis> a;
+  QemStats stats;
+  Index base = 0;            // node id of its first collapse in the whole
+  std::size_t ring_base = 0; // its first stored ring item in the whole
+  std::exception_ptr error;
+};
+
+// More threads than this are not used (each part runs on one).
+constexpr std::size_t kMaxParts = 256;
+
+std::size_t Analysis::parallel_parts() const {
+  if (colors_ || lt_) return 1;
+  std::size_t threads = opt_.threads;
+  if (threads == 0) threads = std::max<std::size_t>(1, std::thread::hardware_concurrency());
+  threads = std::min(threads, kMaxParts);
+  return std::max<std::size_t>(1, std::min(threads, nf_ / opt_.min_part_faces));
+}
+
+void Analysis::run_parts(std::size_t k, QemStats& stats) {
+  std::vector<Part> parts(k);
+  // fn(t) for each part, parts 1.. on threads of their own and part 0 on this one after on_caller(); an
+  // exception is kept in its part (on_caller's is rethrown once every thread is joined).
+  auto run_in_threads = [&](auto&& fn, auto&& on_caller) {
+    auto guarded = [&](std::size_t t) {
+      try {
+        fn(t);
+      } catch (...) {
+        parts[t].error = std::current_exception();
+      }
+    };
+    std::vector<std::thread> threads;
+    std::exception_ptr caller_error;
+    try {
+      for (std::size_t t = 1; t < k; ++t) threads.emplace_back(guarded, t);
+      on_caller();
+      guarded(0);
+    } catch (...) {
+      caller_error = std::current_exception();
+    }
+    for (std::thread& th : threads) th.join();
+    if (caller_error) std::rethrow_exception(caller_error);
+    for (Part& P : parts)
+      if (P.error) std::rethrow_exception(P.error);
+  };
+  // Parts: recursive median cuts of the face centroids (ties by face id, so the split is reproducible).
+  std::vector<std::uint32_t> part_of(nf_);
+  {
+    std::vector<glm::vec3> cen(nf_);
+    for (std::size_t f = 0; f < nf_; ++f)
+      cen[f] = (in_.positions[in_.faces[3 * f]] + in_.positions[in_.faces[3 * f + 1]] + in_.positions[in_.faces[3 * f + 2]]) / 3.0f;
+    std::vector<Index> order(nf_);
+    std::iota(order.begin(), order.end(), Index{0});
+    auto split = [&](auto&& self, Index* first, Index* last, std::size_t count, std::uint32_t id) -> void {
+      if (count == 1) {
+        for (Index* it = first; it != last; ++it) part_of[*it] = id;
+        return;
+      }
+      Box3 box;
+      for (Index* it = first; it != last; ++it) box.add(cen[*it]);
+      const glm::vec3 ext = box.hi - box.lo;
+      const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+      const std::size_t left = count / 2;
+      Index* mid = first + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(last - first) * left / count);
+      std::nth_element(first, mid, last, [&](Index x, Index y) {
+        return cen[x][axis] < cen[y][axis] || (cen[x][axis] == cen[y][axis] && x < y);
+      });
+      self(self, first, mid, left, id);
+      self(self, mid, last, count - left, static_cast<std::uint32_t>(id + left));
+    };
+    split(split, order.data(), order.data() + nf_, k, 0);
+  }
+  // Seam and band.
+  constexpr std::uint32_t kNone = ~std::uint32_t{0}, kSeam = kNone - 1;
+  std::vector<std::uint32_t> owner(nl_, kNone);
+  for (std::size_t f = 0; f < nf_; ++f)
+    for (int c = 0; c < 3; ++c) {
+      std::uint32_t& o = owner[in_.faces[3 * f + c]];
+      o = o == kNone || o == part_of[f] ? part_of[f] : kSeam;
+    }
+  std::vector<std::uint8_t> band(nl_, 0);
+  std::vector<Index> seam_faces;  // faces with a seam corner, ascending
+  for (std::size_t f = 0; f < nf_; ++f) {
+    const Index* c = &in_.faces[3 * f];
+    if (owner[c[0]] == kSeam || owner[c[1]] == kSeam || owner[c[2]] == kSeam) {
+      band[c[0]] = band[c[1]] = band[c[2]] = 1;
+      seam_faces.push_back(static_cast<Index>(f));
+    }
+  }
+  for (std::size_t f = 0; f < nf_; ++f) parts[part_of[f]].faces.push_back(static_cast<Index>(f));
+  // Part slots: the part's own vertices (not on the seam) in their order, then the seam vertices it touches
+  // in theirs (found by binary search).
+  std::vector<Index> local(nl_, kInvalid);  // per vertex not on the seam: its slot in its part
+  for (Index g = 0; g < nl_; ++g)
+    if (owner[g] < k) {
+      Part& P = parts[owner[g]];
+      local[g] = static_cast<Index>(P.l2g.size());
+      P.l2g.push_back(g);
+    }
+  for (Index f : seam_faces)
+    for (int c = 0; c < 3; ++c)
+      if (const Index g = in_.faces[3 * f + c]; owner[g] == kSeam) parts[part_of[f]].seam.push_back(g);
+  for (Part& P : parts) {
+    std::sort(P.seam.begin(), P.seam.end());
+    P.seam.erase(std::unique(P.seam.begin(), P.seam.end()), P.seam.end());
+    P.own = P.l2g.size();
+    P.l2g.insert(P.l2g.end(), P.seam.begin(), P.seam.end());
+  }
+  std::size_t band_vertices = 0, band_faces = seam_faces.size();
+  for (std::uint8_t b : band) band_vertices += b;
+  // What the parts leave to the whole: their share of the targets (times the Lindstrom-Turk finish, which
+  // runs on the whole, and at least 1.5 so that the whole ends at the targets, not the parts), the band
+  // included; no target (an error limit or the smallest base mesh) lets them go as far as they can.
+  const double factor = std::max(opt_.lt_finish, 1.5);
+
+  auto build = [&](std::size_t t) {
+    Part& P = parts[t];
+    auto to_local = [&](Index g) {
+      if (owner[g] != kSeam) return local[g];
+      return static_cast<Index>(P.own + static_cast<std::size_t>(std::lower_bound(P.seam.begin(), P.seam.end(), g) - P.seam.begin()));
+    };
+    std::size_t part_band = 0;
+    for (Index g : P.l2g) part_band += band[g];
+    ManifoldInput in;
+    const std::size_t nl = P.l2g.size(), nf = P.faces.size();
+    in.positions.resize(nl);
+    in.locked.resize(nl);
+    for (std::size_t l = 0; l < nl; ++l) {
+      in.positions[l] = in_.positions[P.l2g[l]];
+      in.locked[l] = in_.locked[P.l2g[l]] | band[P.l2g[l]];
+    }
+    in.faces.resize(3 * nf);
+    std::size_t part_band_faces = 0;
+    for (std::size_t i = 0; i < nf; ++i) {
+      bool in_band = false;
+      for (int c = 0; c < 3; ++c) {
+        const Index g = in_.faces[3 * P.faces[i] + c];
+        in.faces[3 * i + c] = to_local(g);
+        in_band |= owner[g] == kSeam;
+      }
+      part_band_faces += in_band;
+    }
+    QemOptions o = opt_;
+    o.progress = {};
+    o.threads = 1;
+    o.lt_finish = 0.0;
+    auto share = [&](std::size_t target, std::size_t part_total, std::size_t part_fixed, std::size_t total, std::size_t fixed) {
+      if (target == 0) return std::size_t{0};
+      const double free_total = static_cast<double>(std::max<std::size_t>(1, total - fixed));
+      return part_fixed + static_cast<std::size_t>(std::ceil(factor * static_cast<double>(target) *
+                                                             static_cast<double>(part_total - part_fixed) / free_total));
+    };
+    o.target_vertices = share(opt_.target_vertices, nl, part_band, nl_, band_vertices);
+    o.target_faces = share(opt_.target_faces, nf, part_band_faces, nf_, band_faces);
+    P.a = std::make_unique<Analysis>(std::move(in), o);
+    Analysis& A = *P.a;
+    A.nl_ = nl;
+    A.nf_ = nf;
+    A.center_ = center_;
+    A.scale_ = scale_;
+    A.volume_ = volume_;
+    A.alive_bias_ = nl_ - nl;
+    A.init_state();
+    A.init_faces();
+    A.init_quadrics();
+    A.init_edges();
+    A.init_raw();
+    A.init_leaf_bounds();
+    A.collapse_loop(P.stats);
+  };
+  // Copy the parts' results into the whole (each writes its own slots, faces and node ids).
+  auto merge = [&](std::size_t t) {
+    Part& P = parts[t];
+    const Analysis& A = *P.a;
+    const std::size_t nl = A.nl_;
+    auto node = [&](Index n) { return n < nl ? P.l2g[n] : static_cast<Index>(P.base + (n - nl)); };
+    auto face = [&](Index f) { return f == kInvalid ? kInvalid : P.faces[f]; };
+    for (std::size_t l = 0; l < nl; ++l) {
+      const Index g = P.l2g[l];
+      if (owner[g] == kSeam) continue;
+      node_of_[g] = node(A.node_of_[l]);
+      geo_[g] = A.geo_[l];
+      uerr_[g] = A.uerr_[l];
+      height_[g] = A.height_[l];
+      border_[g] = A.border_[l];
+      node_alive_[g] = A.node_alive_[l];
+      raw_.bounds[g] = A.raw_.bounds[l];
+    }
+    for (std::size_t i = 0; i < P.faces.size(); ++i) {
+      const Index f = P.faces[i];
+      alive_[f] = A.alive_[i];
+      for (int c = 0; c < 3; ++c) cur_[3 * f + c] = P.l2g[A.cur_[3 * i + c]];
+    }
+    const std::size_t nc = A.raw_.records.size();
+    for (std::size_t j = 0; j < nc; ++j) {
+      const std::size_t id = P.base + j;
+      raw_.positions[id] = A.raw_.positions[nl + j];
+      raw_.bounds[id] = A.raw_.bounds[nl + j];
+      CollapseRecord r = A.raw_.records[j];
+      r.vt = node(r.vt);
+      r.vu = node(r.vu);
+      if (r.vl_hat != kInvalid) r.vl_hat = P.l2g[r.vl_hat];
+      if (r.vr_hat != kInvalid) r.vr_hat = P.l2g[r.vr_hat];
+      r.fl_hat = face(r.fl_hat);
+      r.fr_hat = face(r.fr_hat);
+      for (Index& f : r.fn) f = face(f);
+      raw_.records[id - nl_] = r;
+      raw_.ring_offsets[id - nl_ + 1] = static_cast<Index>(P.ring_base + A.raw_.ring_offsets[j + 1]);
+    }
+    for (std::size_t i = 0; i < A.raw_.ring_items.size(); ++i) raw_.ring_items[P.ring_base + i] = node(A.raw_.ring_items[i]);
+    P.a.reset();  // freed here, in parallel (a part's arrays take about as long to free as to merge)
+  };
+  // The whole's own share, done on this thread while the parts run: its state, and the seam vertices'
+  // quadrics and bounds (from all their faces, in face order as a serial run sums them).
+  auto whole = [&] {
+    init_state();
+    init_raw();
+    std::vector<Run> runs(nl_);
+    for (Index f : seam_faces)
+      for (int c = 0; c < 3; ++c) ++runs[in_.faces[3 * f + c]].cnt;
+    Index off = 0, most = 0;
+    for (Run& r : runs) r.off = off, off += r.cnt, most = std::max(most, r.cnt), r.cnt = 0;
+    std::vector<Index> pool(off);
+    for (Index f : seam_faces)
+      for (int c = 0; c < 3; ++c) {
+        Run& r = runs[in_.faces[3 * f + c]];
+        pool[r.off + r.cnt++] = f;
+      }
+    std::vector<Index> after(most), before(most);
+    for (Index v = 0; v < nl_; ++v) {
+      if (owner[v] != kSeam) continue;
+      const Index* faces = pool.data() + runs[v].off;
+      const Index cnt = runs[v].cnt;
+      Quadric q;
+      double r2 = 0.0;
+      for (Index i = 0; i < cnt; ++i) {
+        const Index* c = &cur_[3 * faces[i]];
+        q += Quadric::from_triangle(geo_[c[0]].p, geo_[c[1]].p, geo_[c[2]].p);
+        for (int j = 0; j < 3; ++j) {
+          const glm::dvec3 d = glm::dvec3(in_.positions[c[j]]) - glm::dvec3(in_.positions[v]);
+          r2 = std::max(r2, glm::dot(d, d));
+        }
+      }
+      geo_[v].q = q;
+      border_quadric(v, faces, cnt, after.data(), before.data());
+      raw_.bounds[v] = leaf_bound(in_.positions[v], r2, cnt, [&](Index i) {
+        const Index* c = &cur_[3 * faces[i]];
+        return unit_normal(in_.positions[c[0]], in_.positions[c[1]], in_.positions[c[2]]);
+      });
+    }
+  };
+  run_in_threads(build, whole);
+
+  // Node ids and stored rings, part after part.
+  std::size_t collapses = 0, rings = 0, dead_faces = 0;
+  for (Part& P : parts) {
+    P.base = static_cast<Index>(nl_ + collapses);
+    P.ring_base = rings;
+    collapses += P.a->raw_.records.size();
+    rings += P.a->raw_.ring_items.size();
+    dead_faces += P.a->nf_ - P.a->alive_faces_;
+    stats.collapses += P.stats.collapses;
+    stats.rejected_link += P.stats.rejected_link;
+    stats.rejected_flip += P.stats.rejected_flip;
+    stats.rejected_depth += P.stats.rejected_depth;
+    stats.rejected_error += P.stats.rejected_error;
+    stats.queue_rebuilds += P.stats.queue_rebuilds;
+  }
+  raw_.positions.resize(nl_ + collapses);
+  raw_.bounds.resize(nl_ + collapses);
+  raw_.records.resize(collapses);
+  raw_.ring_offsets.resize(collapses + 1);
+  raw_.ring_items.resize(rings);
+  run_in_threads(merge, [] {});
+  alive_vertices_ = nl_ - collapses;
+  alive_faces_ = nf_ - dead_faces;
+  init_faces();
+  init_edges();
 }
 
 VertexHierarchy Analysis::run(QemStats& stats) {
@@ -1038,8 +1373,36 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   lt_ = opt_.cost == CollapseCost::kLindstromTurk && !colors_;
   volume_ = opt_.preserve_volume && !lt_ && !colors_;
 
-  // The hierarchy holds at most 2 nl - 1 nodes; the working state nl slots.
-  const std::size_t max_nodes = 2 * nl_;
+  if (const std::size_t parts = parallel_parts(); parts > 1) {
+    run_parts(parts, stats);
+  } else {
+    init_state();
+    init_faces();
+    init_quadrics();
+    init_edges();
+    init_raw();
+    init_leaf_bounds();
+  }
+  collapse_loop(stats);
+
+  raw_.faces = in_.faces;
+  raw_.leaf_to_input = std::move(in_.leaf_to_input);
+  raw_.face_to_input = std::move(in_.face_to_input);
+  raw_.locked = std::move(in_.locked);
+  raw_.repair = in_.report;
+  stats.base_vertices = alive_vertices_;
+  stats.base_faces = alive_faces_;
+#ifdef NDEBUG
+  constexpr bool kValidate = false;
+#else
+  constexpr bool kValidate = true;
+#endif
+  VertexHierarchy h = VertexHierarchyBuilder::finish(std::move(raw_), kValidate, /*trusted=*/true);
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return h;
+}
+
+void Analysis::init_state() {
   node_of_.resize(nl_);
   std::iota(node_of_.begin(), node_of_.end(), Index{0});
   geo_.assign(nl_, Geo{});
@@ -1066,11 +1429,11 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     color_hi_ = glm::vec3(std::numeric_limits<float>::lowest());
     for (const glm::vec3& c : in_.colors) color_lo_ = glm::min(color_lo_, c), color_hi_ = glm::max(color_hi_, c);
   }
-  init_faces();
-  init_quadrics();
-  init_edges();
+}
 
-  // Raw hierarchy: leaves first.
+void Analysis::init_raw() {
+  // Raw hierarchy: leaves first. It holds at most 2 nl - 1 nodes.
+  const std::size_t max_nodes = 2 * nl_;
   raw_.num_leaves = nl_;
   raw_.positions.reserve(max_nodes);
   raw_.positions = in_.positions;
@@ -1083,8 +1446,9 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   raw_.records.reserve(nl_);
   raw_.ring_offsets.reserve(nl_ + 1);
   raw_.ring_items.reserve(8 * nl_);
-  init_leaf_bounds();
+}
 
+void Analysis::collapse_loop(QemStats& stats) {
   stale_.assign(lt_ ? edges_.size() : 0, 0);
   const std::size_t target_v = opt_.target_vertices;
   const std::size_t target_f = opt_.target_faces;
@@ -1186,22 +1550,6 @@ VertexHierarchy Analysis::run(QemStats& stats) {
     }
     if (next != kInvalid) touch_runs(edges_[next].a, edges_[next].b);
   }
-
-  raw_.faces = in_.faces;
-  raw_.leaf_to_input = std::move(in_.leaf_to_input);
-  raw_.face_to_input = std::move(in_.face_to_input);
-  raw_.locked = std::move(in_.locked);
-  raw_.repair = in_.report;
-  stats.base_vertices = alive_vertices_;
-  stats.base_faces = alive_faces_;
-#ifdef NDEBUG
-  constexpr bool kValidate = false;
-#else
-  constexpr bool kValidate = true;
-#endif
-  VertexHierarchy h = VertexHierarchyBuilder::finish(std::move(raw_), kValidate);
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return h;
 }
 
 // make_manifold_input() of an input that needs no repair, in O(n) instead of its sorts: the same leaves
@@ -1311,6 +1659,7 @@ VertexHierarchy build_vertex_hierarchy(const TriMesh& mesh, const QemOptions& op
   if (!(options.lt_finish == 0.0 || (options.lt_finish > 1.0 && std::isfinite(options.lt_finish))))
     throw InvalidInput("QemOptions::lt_finish must be 0 or a finite number > 1");
   if (options.max_depth < 1 || options.max_depth > 62) throw InvalidInput("QemOptions::max_depth must be in [1, 62]");
+  if (options.min_part_faces == 0) throw InvalidInput("QemOptions::min_part_faces must be at least 1");
   if (options.cost != CollapseCost::kQuadric && options.cost != CollapseCost::kLindstromTurk)
     throw InvalidInput("QemOptions::cost must be CollapseCost::kQuadric or kLindstromTurk, not " +
                        std::to_string(static_cast<int>(options.cost)));

@@ -99,6 +99,17 @@ struct QemOptions {
   NonManifoldPolicy non_manifold = NonManifoldPolicy::kSplit;
   /// Deepest tree allowed (node ids need depth + 1 bits; the tree ids take the rest of the 64 bits).
   int max_depth = 44;
+  /// Parts simplified at the same time, each on a thread of its own (0: one per hardware thread). With
+  /// more than one, the faces are cut into that many parts of about equal size; each part is simplified
+  /// alone, the vertices on and next to the cuts locked, down to its share of the targets, and the whole
+  /// mesh goes on from there as a serial run does (qem_analysis.cpp, run_parts()). The hierarchy is valid
+  /// and reproducible for a given value, but not the one a serial run gives (a different collapse order).
+  /// Applies with CollapseCost::kQuadric and no colours, to meshes of at least min_part_faces faces per part
+  /// (fewer parts otherwise), and at most 256 parts; 1 (the default) is the serial analysis.
+  std::size_t threads = 1;
+  /// The fewest faces a part of a parallel analysis may have (>= 1; see threads). Smaller parts have a larger
+  /// share of their vertices locked near the cuts.
+  std::size_t min_part_faces = 16384;
   /// Called every 4096 collapses with (collapses done, vertices left); may be empty. What it throws ends the
   /// analysis and propagates.
   std::function<void(std::size_t, std::size_t)> progress;

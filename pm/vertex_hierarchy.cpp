@@ -56,27 +56,12 @@ std::size_t VertexHierarchy::memory_bytes() const noexcept {
          (ring_offsets_.size() + ring_items_.size()) * sizeof(Index) + keys_.size() * sizeof(NodeKey);
 }
 
-VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
-  VertexHierarchy h;
-  const std::size_t nl = raw.num_leaves;
-  const std::size_t nn = raw.positions.size();
-  const std::size_t nc = raw.records.size();
-  if (nl == 0) bad("no leaf");
-  if (nn != nl + nc) bad("positions: " + std::to_string(nn) + " nodes for " + std::to_string(nl) + " leaves and " + std::to_string(nc) + " collapses");
-  if (nn >= kInvalid) bad("too many nodes");
-  if (!raw.colors.empty() && raw.colors.size() != nn) bad("colors: wrong count");
-  if (raw.bounds.size() != nn) bad("bounds: wrong count");
-  if (raw.faces.size() % 3 != 0 || raw.faces.empty()) bad("faces: count not a positive multiple of 3");
-  const std::size_t nf = raw.faces.size() / 3;
-  if (raw.ring_offsets.size() != nc + 1 || raw.ring_offsets[0] != 0 || raw.ring_offsets.back() != raw.ring_items.size())
-    bad("stored rings: offsets inconsistent");
-  for (std::size_t i = 0; i < nc; ++i)
-    if (raw.ring_offsets[i + 1] < raw.ring_offsets[i]) bad("stored rings: offsets decrease at collapse " + std::to_string(i));
-  if (raw.leaf_to_input.size() != nl) bad("leaf_to_input: wrong count");
-  if (raw.face_to_input.size() != nf) bad("face_to_input: wrong count");
-  if (!raw.locked.empty() && raw.locked.size() != nl) bad("locked: wrong count");
-  for (std::size_t i = 0; i < raw.faces.size(); ++i)
-    if (raw.faces[i] >= nl) bad("face " + std::to_string(i / 3) + ": corner is not a leaf");
+// The checks of finish() that only an untrusted Raw needs (a file's): the maps back to the input, the repair
+// report's sums, finite positions inside their own spheres, and the leaves' spheres holding their faces.
+namespace {
+
+void check_untrusted(const VertexHierarchyBuilder::Raw& raw) {
+  const std::size_t nl = raw.num_leaves, nn = raw.positions.size(), nf = raw.faces.size() / 3;
   // The maps back to the caller's mesh stay inside it (leaves_of_inputs and the commands index by them).
   for (std::size_t l = 0; l < nl; ++l)
     if (raw.leaf_to_input[l] >= raw.repair.input_vertices)
@@ -130,7 +115,32 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
       for (int j = 1; j < 3; ++j)
         if (outside(raw.positions[raw.faces[3 * f + (k + j) % 3]], raw.bounds[raw.faces[3 * f + k]]))
           bad("leaf " + std::to_string(raw.faces[3 * f + k]) + ": face " + std::to_string(f) + " leaves its bounding sphere");
+}
 
+}  // namespace
+
+VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate, bool trusted) {
+  VertexHierarchy h;
+  const std::size_t nl = raw.num_leaves;
+  const std::size_t nn = raw.positions.size();
+  const std::size_t nc = raw.records.size();
+  if (nl == 0) bad("no leaf");
+  if (nn != nl + nc) bad("positions: " + std::to_string(nn) + " nodes for " + std::to_string(nl) + " leaves and " + std::to_string(nc) + " collapses");
+  if (nn >= kInvalid) bad("too many nodes");
+  if (!raw.colors.empty() && raw.colors.size() != nn) bad("colors: wrong count");
+  if (raw.bounds.size() != nn) bad("bounds: wrong count");
+  if (raw.faces.size() % 3 != 0 || raw.faces.empty()) bad("faces: count not a positive multiple of 3");
+  const std::size_t nf = raw.faces.size() / 3;
+  if (raw.ring_offsets.size() != nc + 1 || raw.ring_offsets[0] != 0 || raw.ring_offsets.back() != raw.ring_items.size())
+    bad("stored rings: offsets inconsistent");
+  for (std::size_t i = 0; i < nc; ++i)
+    if (raw.ring_offsets[i + 1] < raw.ring_offsets[i]) bad("stored rings: offsets decrease at collapse " + std::to_string(i));
+  if (raw.leaf_to_input.size() != nl) bad("leaf_to_input: wrong count");
+  if (raw.face_to_input.size() != nf) bad("face_to_input: wrong count");
+  if (!raw.locked.empty() && raw.locked.size() != nl) bad("locked: wrong count");
+  for (std::size_t i = 0; i < raw.faces.size(); ++i)
+    if (raw.faces[i] >= nl) bad("face " + std::to_string(i / 3) + ": corner is not a leaf");
+  if (!trusted) check_untrusted(raw);
   h.parent_.assign(nn, kInvalid);
   h.face_creator_.assign(nf, kInvalid);
   for (std::size_t i = 0; i < nc; ++i) {
@@ -166,7 +176,7 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate) {
   // faces or faces created by later collapses (a face created by vs itself or earlier sends the forced splits
   // round in a cycle). Xia-Varshney's stored ring of vs is the 1-ring right after its collapse: nodes before vs
   // that are collapsed after it, if at all.
-  for (std::size_t i = 0; i < nc; ++i) {
+  for (std::size_t i = 0; i < nc && !trusted; ++i) {
     const CollapseRecord& r = raw.records[i];
     const Index vs = static_cast<Index>(nl + i);
     for (Index f : r.fn)

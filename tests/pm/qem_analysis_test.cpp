@@ -17,6 +17,7 @@
 #include "multitri/errors.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/mesh_report.hpp"
+#include "pm/hierarchy_io.hpp"
 #include "pm/manifold_input.hpp"
 #include "pm/sr_mesh.hpp"
 #include "distance_oracle.hpp"
@@ -67,10 +68,20 @@ std::vector<Config> configs() {
   plain.lt_finish = 0.0;
   QemOptions finish;
   finish.target_faces = 12;
+  // The parallel analysis on these small meshes: parts of a few dozen faces, so that most collapses meet a
+  // cut's band and the seams cross every kind of place (borders, handles).
+  QemOptions parts4;
+  parts4.threads = 4;
+  parts4.min_part_faces = 24;
+  QemOptions parts3 = finish;
+  parts3.threads = 3;
+  parts3.min_part_faces = 24;
   return {{"quadric, volume kept", QemOptions{}},
           {"quadric, plain placement", plain},
           {"Lindstrom-Turk", with_cost(CollapseCost::kLindstromTurk)},
-          {"quadric to 12 faces, Lindstrom-Turk finish", finish}};
+          {"quadric to 12 faces, Lindstrom-Turk finish", finish},
+          {"quadric, 4 parts in parallel", parts4},
+          {"quadric to 12 faces, 3 parts in parallel", parts3}};
 }
 
 TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
@@ -214,6 +225,45 @@ TEST(QemAnalysis, MaxErrorSkipsCollapsesOverTheLimit) {
   // What the analysis left is everything within the limit: with a larger limit it goes further.
   o.max_error = 4 * limit;
   EXPECT_GT(build_vertex_hierarchy(m, o).num_collapses(), h.num_collapses());
+}
+
+// Parallel analysis (QemOptions::threads): the targets are met as in a serial run, the result does not
+// depend on the threads' timing, and it is the serial one when only one part fits.
+TEST(QemAnalysis, PartsKeepTheTargetsAndAreReproducible) {
+  const TriMesh m = make_torus(64, 40);  // 5,120 faces
+  for (std::size_t threads : {2u, 3u, 5u}) {
+    SCOPED_TRACE(threads);
+    QemOptions o;
+    o.threads = threads;
+    o.min_part_faces = 512;
+    o.target_vertices = 200;
+    QemStats st;
+    const VertexHierarchy hv = build_vertex_hierarchy(m, o, &st);
+    EXPECT_EQ(hv.num_roots(), 200u);
+    EXPECT_EQ(st.base_vertices, 200u);
+    EXPECT_EQ(st.collapses, hv.num_collapses());
+    o.target_vertices = 0;
+    o.target_faces = 400;
+    const VertexHierarchy hf = build_vertex_hierarchy(m, o, &st);
+    EXPECT_LE(hf.base_faces().size(), 400u);
+    EXPECT_GE(hf.base_faces().size(), 398u);
+    EXPECT_TRUE(st.lt_finished);
+    // Reproducible: the same bytes from another run.
+    EXPECT_EQ(encode_vertex_hierarchy(build_vertex_hierarchy(m, o)), encode_vertex_hierarchy(hf));
+    // Down to the smallest base mesh, as far as a serial run goes (a torus: 9 vertices at least).
+    o.target_faces = 0;
+    const VertexHierarchy hb = build_vertex_hierarchy(m, o);
+    EXPECT_LE(hb.num_roots(), build_vertex_hierarchy(m).num_roots() + 2);
+  }
+  // One part (too few faces for two): the serial analysis, bit for bit.
+  QemOptions o;
+  o.threads = 4;
+  o.target_faces = 400;
+  QemOptions serial;
+  serial.target_faces = 400;
+  EXPECT_EQ(encode_vertex_hierarchy(build_vertex_hierarchy(m, o)), encode_vertex_hierarchy(build_vertex_hierarchy(m, serial)));
+  o.min_part_faces = 0;
+  EXPECT_THROW(build_vertex_hierarchy(m, o), InvalidInput);
 }
 
 TEST(QemAnalysis, SphereApproximationIsClose) {
@@ -718,6 +768,42 @@ TEST(QemAnalysis, LindstromTurkFinishLowersTheBunnysError) {
   };
   const double quadric = rms(0.0), finished = rms(4.0);
   EXPECT_LT(finished, 0.9 * quadric) << "RMS with the finish " << finished << ", quadrics to the end " << quadric;
+}
+
+// The parallel analysis of the bunny at 1 % against the serial one: the same face count and about the same
+// error (RMS distance from every fourth original vertex to the base mesh, by brute force).
+TEST(QemAnalysis, PartsSimplifyTheBunnyAsWellAsASerialRun) {
+  VARMESH_REQUIRE_SHARED(path, "meshes/bun_zipper_35947v.obj");
+  const TriMesh m = read_mesh(path);
+  auto rms = [&](const VertexHierarchy& h) {
+    const TriMesh base = mesh_after_collapses(h, h.num_collapses());
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (std::size_t v = 0; v < m.num_vertices(); v += 4) {
+      double best = HUGE_VAL;
+      for (std::size_t f = 0; f < base.num_faces(); ++f)
+        best = std::min(best, testing::point_triangle(glm::dvec3(m.positions[v]), glm::dvec3(base.positions[base.indices[3 * f]]),
+                                                      glm::dvec3(base.positions[base.indices[3 * f + 1]]),
+                                                      glm::dvec3(base.positions[base.indices[3 * f + 2]])));
+      sum += best * best;
+      ++n;
+    }
+    return std::sqrt(sum / static_cast<double>(n));
+  };
+  QemOptions o;
+  o.target_faces = m.num_faces() / 100;
+  const VertexHierarchy serial = build_vertex_hierarchy(m, o);
+  for (std::size_t threads : {2u, 4u}) {
+    SCOPED_TRACE(threads);
+    o.threads = threads;
+    QemStats st;
+    const VertexHierarchy parted = build_vertex_hierarchy(m, o, &st);
+    parted.validate();
+    EXPECT_LE(parted.base_faces().size(), o.target_faces);
+    EXPECT_GE(parted.base_faces().size() + 2, serial.base_faces().size());
+    const double a = rms(serial), b = rms(parted);
+    EXPECT_LT(b, 1.1 * a) << "RMS serial " << a << ", " << threads << " parts " << b;
+  }
 }
 
 TEST(QemAnalysis, DirtySharedMeshes) {

@@ -842,6 +842,33 @@ TEST(SrMesh, RandomWalksMatchDualPieceOracleKimLee) {
   RecordProperty("postponed_ecols", static_cast<int>(postponed));
 }
 
+// The same oracle on hierarchies from the parallel analysis (QemOptions::threads), whose collapses are
+// numbered part after part and then continued on the whole.
+TEST(SrMesh, RandomWalksMatchDualPieceOracleOnParallelHierarchies) {
+  std::uint32_t seed = 101;
+  for (const TriMesh& m : {make_icosphere(3), make_grid(20, 14), make_torus(24, 12)}) {
+    QemOptions opt;
+    opt.threads = 3;
+    opt.min_part_faces = 128;
+    const VertexHierarchy h = build_vertex_hierarchy(m, opt);
+    for (RefinementScheme s : kSchemes) {
+      SrMesh all(h, s);
+      all.refine_all();
+      EXPECT_TRUE(same_as_original(all)) << scheme_name(s);
+      all.coarsen_all();
+      EXPECT_TRUE(at_base(all)) << scheme_name(s);
+    }
+    SrMesh sr(h);
+    WalkOptions o;
+    o.ops = 40000, o.seed = seed++, o.full_every = kSparse, o.oracle_every = 50 * kSparse, o.validate_every = 50 * kSparse;
+    const WalkResult r = checked_walk(sr, o);
+    ASSERT_TRUE(r.ok);
+    EXPECT_GT(r.selective_splits, 10000u);
+    EXPECT_GT(r.selective_collapses, 10000u);
+    EXPECT_EQ(sr.stats().degenerate_cases, sr.stats().presplits + sr.stats().postponed_ecols);
+  }
+}
+
 // Hoppe 1997 and Xia-Varshney walks: every split checked against its rule, forced operations counted.
 TEST(SrMesh, BaselineWalksFollowTheirRules) {
   std::uint32_t seed = 7;
