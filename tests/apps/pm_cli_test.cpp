@@ -80,6 +80,32 @@ TEST(PmCli, BuildWritesTheHierarchyTheLibraryReads) {
   }
 }
 
+// --threads runs the library's parallel analysis: the same hierarchy as QemOptions::threads gives, not the
+// serial one (a torus of 65,536 faces: two parts of at least 16,384).
+TEST(PmCli, ThreadsGiveTheLibrarysParallelHierarchy) {
+  const fs::path dir = testing::scratch_dir("pm_cli_threads");
+  const fs::path mesh = dir / "torus.obj", vmh = dir / "torus.vmh";
+  write_mesh(mesh.string(), testing::make_torus(256, 128));
+  const CmdResult r = run("pm build " + mesh.string() + " -o " + vmh.string() + " --faces 600 --threads 2 --quiet", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const VertexHierarchy h = read_vertex_hierarchy(vmh.string());
+  QemOptions o;
+  o.target_faces = 600;
+  const TriMesh input = read_mesh(mesh.string());
+  const VertexHierarchy serial = build_vertex_hierarchy(input, o);
+  o.threads = 2;
+  const VertexHierarchy lib = build_vertex_hierarchy(input, o);
+  EXPECT_LE(h.base_faces().size(), 600u);
+  ASSERT_EQ(h.num_collapses(), lib.num_collapses());
+  bool differs_from_serial = h.num_collapses() != serial.num_collapses();
+  for (Index v = static_cast<Index>(h.num_leaves()); v < h.num_nodes(); ++v) {
+    EXPECT_EQ(h.record(v).vt, lib.record(v).vt) << "node " << v;
+    EXPECT_EQ(h.record(v).vu, lib.record(v).vu) << "node " << v;
+    if (!differs_from_serial) differs_from_serial = h.record(v).vt != serial.record(v).vt || h.record(v).vu != serial.record(v).vu;
+  }
+  EXPECT_TRUE(differs_from_serial);
+}
+
 // --measure reports the library's vertex-to-surface distance: for pm build from the input's vertices to the
 // base mesh, for pm query from the original vertices to the extracted mesh (0 at full resolution).
 TEST(PmCli, MeasureReportsTheDistanceToTheOriginal) {
@@ -159,6 +185,9 @@ TEST(PmCli, BadInputIsNamed) {
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --faces 100 --cost lindstrom-turk --lt-finish 3", "--lt-finish is for --cost quadric"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --faces 100 --colors --lt-finish 3", "--lt-finish does not apply with --colors"},
       {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --colors --cost lindstrom-turk", "--cost lindstrom-turk would be ignored"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --threads 2 --cost lindstrom-turk", "--threads is for --cost quadric"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --threads 0 --colors", "--threads does not apply with --colors"},
+      {"pm build " + b.mesh.string() + " -o " + (b.dir / "h.vmh").string() + " --threads -1", "--threads: must be an integer >= 0"},
       {"pm query " + b.vmh.string() + " -o " + out, "give --error E, --camera ... or --budget N"},
       {"pm query " + b.vmh.string() + " --error 1 --scheme fast -o " + out, "--scheme: unknown 'fast'"},
       {"pm query " + b.vmh.string() + " --error nan -o " + out, "--error must be"},
