@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -424,6 +426,28 @@ TEST(MeshReportFixtures, CoincidentVerticesCountCopiesNotFirsts) {
   EXPECT_NE(format_report(r).find("4 at the position of another"), std::string::npos) << format_report(r);
 }
 
+// analyze_mesh counts coincident positions with a hash of their bit patterns, which is only right for finite
+// coordinates (NaN != NaN); validate() keeps NaN and infinity out, naming the vertex.
+TEST(MeshReportFixtures, NonFinitePositionsThrowNamingTheVertex) {
+  const float bad[] = {std::nanf(""), -std::nanf(""), std::numeric_limits<float>::infinity(),
+                       -std::numeric_limits<float>::infinity()};
+  for (const float b : bad)
+    for (int axis = 0; axis < 3; ++axis) {
+      TriMesh t = tetrahedron();
+      t.positions.push_back(t.positions[1]);
+      t.positions.push_back(t.positions[1]);
+      t.positions[4][axis] = b;
+      t.positions[5][axis] = b;
+      try {
+        analyze_mesh(t);
+        ADD_FAILURE() << "no throw for " << b << " on axis " << axis;
+      } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
+        EXPECT_EQ(e.element(), 4u) << e.what();
+      }
+    }
+}
+
 TEST(MeshReportExact, Collinearity) {
   using detail::exactly_collinear;
   EXPECT_TRUE(exactly_collinear({1, 2, 3}, {3, 5, 7}, {5, 8, 11}));
@@ -448,6 +472,51 @@ TEST(MeshReportOracle, RandomSoupsMatchNaivePortOfMeshstat) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     expect_matches_naive(m);
   }
+}
+
+// Coincident vertices against an ordered set of positions, on clouds drawn from a few values (so most
+// positions repeat, some many times), with -0 and +0 among them, tiny and huge magnitudes, and sizes that
+// make the hash table wrap around.
+TEST(MeshReportOracle, CoincidentVerticesMatchAnOrderedSet) {
+  std::mt19937 rng(2024);
+  const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.1f, 1e-45f, -1e-45f, 1e-38f, 3.4e38f, -3.4e38f, 16777216.0f,
+                          16777217.0f, 0.30000001f, 0.3f};
+  const std::size_t num_values = std::size(values);
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::size_t nv = rng() % (trial < 100 ? 40 : 5000);
+    // Per trial, how many distinct values each coordinate draws from: from all equal to mostly distinct.
+    const std::size_t spread = 1 + rng() % num_values;
+    TriMesh m;
+    for (std::size_t v = 0; v < nv; ++v) {
+      glm::vec3 p;
+      for (int k = 0; k < 3; ++k) p[k] = values[rng() % spread];
+      if (rng() % 4 == 0) p.z = static_cast<float>(rng() % 64);  // more distinct places
+      if (v > 0 && rng() % 8 == 0) p = m.positions[rng() % v];   // an exact copy of an earlier vertex
+      m.positions.push_back(p);
+    }
+    std::set<std::tuple<float, float, float>> places;  // std::less<float>: -0 and +0 are one key
+    for (const glm::vec3& p : m.positions) places.insert({p.x, p.y, p.z});
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(nv) + " vertices");
+    EXPECT_EQ(analyze_mesh(m).coincident_vertices, nv - places.size());
+  }
+}
+
+// Positions on an integer lattice, all distinct, and then each repeated with its zero coordinates written as
+// -0: hash keys that differ in few bits, and copies that differ from the original in their bits.
+TEST(MeshReportOracle, CoincidentVerticesOnALattice) {
+  TriMesh m;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j)
+      for (int k = 0; k < 8; ++k) m.positions.emplace_back(static_cast<float>(i), static_cast<float>(j), static_cast<float>(k));
+  const std::size_t n = m.num_vertices();
+  EXPECT_EQ(analyze_mesh(m).coincident_vertices, 0u);
+  for (std::size_t v = 0; v < n; ++v) {
+    glm::vec3 p = m.positions[v];
+    for (int k = 0; k < 3; ++k)
+      if (p[k] == 0.0f) p[k] = -0.0f;
+    m.positions.push_back(p);
+  }
+  EXPECT_EQ(analyze_mesh(m).coincident_vertices, n);
 }
 
 TEST(MeshReportOracle, ReportIsInvariantUnderFaceOrderAndCornerRotation) {
