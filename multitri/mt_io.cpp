@@ -72,11 +72,14 @@ DataEnd locate_data_end(std::string_view bytes, const Header& h) {
   if (array(h.nf, 12, "face", end)) return end;
   if (size - at < 4) return stop("the base image size");
   at += 4;
+  // Every version-1 file is walked here: the node's name is built only where the data stops.
+  auto node = [&](std::uint64_t n) {
+    return "the record of node " + std::to_string(n) + " (nodes 1 to " + std::to_string(h.nn - 1) + ")";
+  };
   for (std::uint64_t n = 1; n < h.nn; ++n) {
-    const std::string what = "the record of node " + std::to_string(n) + " (nodes 1 to " + std::to_string(h.nn - 1) + ")";
-    if (size - at < 9) return stop(what);
+    if (size - at < 9) return stop(node(n));
     const std::uint64_t removed = detail::load_le<std::uint32_t>(bytes.data() + at + 5);
-    if (size - at < kNodeFixedBytes + 4 * removed) return stop(what);
+    if (size - at < kNodeFixedBytes + 4 * removed) return stop(node(n));
     at += kNodeFixedBytes + 4 * removed;
   }
   if (size - at < kChecksumBytes) return stop("the checksum");

@@ -217,6 +217,24 @@ TEST(MtIo, CountsThatDisagreeWithTheSizeAreRefused) {
   }
 }
 
+// A cut version-1 file names the node record where its data stops (the name is built only then).
+TEST(MtIo, VersionOneTruncationNamesTheNode) {
+  const Mt mt = square_mt(3);
+  const std::string v1 = testing::as_version_1(encode_mt(mt));
+  // Version 1 has no bytes 24 .. 39; the records follow the positions, the faces and the base image size.
+  std::size_t at = 24 + 12 * mt.num_vertices() + 12 * mt.num_faces() + 4;
+  const std::string last = std::to_string(mt.num_nodes() - 1);
+  for (NodeId n = 1; n < mt.num_nodes(); ++n) {
+    const std::size_t record = 13 + 4 * mt.pre_image(n).size();
+    const std::string where = "the record of node " + std::to_string(n) + " (nodes 1 to " + last + ")";
+    EXPECT_TRUE(contains(decode_error(v1.substr(0, at), "old.vrm").reason(), "the data ends before " + where));
+    EXPECT_TRUE(contains(decode_error(v1.substr(0, at + record - 1), "old.vrm").reason(),
+                         "the data ends in the middle of " + where));
+    at += record;
+  }
+  EXPECT_EQ(at + 8, v1.size());
+}
+
 // Version-1 files (no size, no header checksum) are still read; a cut one is refused and says it may be cut.
 TEST(MtIo, VersionOneFilesAreStillRead) {
   const Mt mt = square_mt(3);
