@@ -86,6 +86,50 @@ DataEnd locate_data_end(std::string_view bytes, const Header& h) {
   return DataEnd{true, at + kChecksumBytes, {}};
 }
 
+// FNV-1a 64 of bytes [0, end) with the version field read as `version`.
+std::uint64_t sum_with_version(std::string_view bytes, std::size_t end, std::uint32_t version) noexcept {
+  char field[4];
+  for (std::size_t k = 0; k < 4; ++k) field[k] = static_cast<char>((version >> (8 * k)) & 0xffu);
+  std::uint64_t h = detail::fnv1a64(bytes.data(), kVersionAt);
+  h = detail::fnv1a64(field, sizeof field, h);
+  return detail::fnv1a64(bytes.data() + kVersionAt + 4, end - kVersionAt - 4, h);
+}
+
+// A version field that does not read 2 (the file has at least the magic and the field). Tells a damaged
+// field from a format this build does not know by the checksums, which cover the field: the version-2 header
+// checksum (bytes 0 .. 31) and, for version 1, the whole file's. Returns when the field reads 1 and nothing
+// says otherwise; throws through `fail` when the file is corrupt or of an unknown version.
+template <class Fail> void check_version_field(std::string_view bytes, std::uint32_t version, const Fail& fail) {
+  const std::size_t size = bytes.size();
+  const std::string reads = "its format version reads " + std::to_string(version);
+  const bool has_v2_header = size >= kHeaderBytes;
+  const std::uint64_t stored_header_sum = has_v2_header ? detail::load_le<std::uint64_t>(bytes.data() + kHeaderSumAt) : 0;
+  // A version-1 file (whose bytes 24 .. 39 are positions) passes this test with probability 2^-64.
+  if (has_v2_header && stored_header_sum == sum_with_version(bytes, kHeaderSumAt, kMtFormatVersion))
+    fail("the file is corrupt: " + reads + ", but its header checksum matches version " +
+             std::to_string(kMtFormatVersion) + " (the version field is damaged)",
+         kVersionAt);
+  if (version == 1) return;
+  if (has_v2_header && stored_header_sum == detail::fnv1a64(bytes.data(), kHeaderSumAt))
+    fail("unsupported MT file version " + std::to_string(version) + " (this build reads versions 1 and " +
+             std::to_string(kMtFormatVersion) + "; the header checksum matches, so this is not damage)",
+         kVersionAt);
+  // Laid out as version 2 (the size field holds the real size), yet its header checksum fails.
+  if (has_v2_header && detail::load_le<std::uint64_t>(bytes.data() + kSizeAt) == size)
+    fail("the file is corrupt: " + reads + ", which this build does not know, and its version-" +
+             std::to_string(kMtFormatVersion) + " header fails its checksum (stored " + hex64(stored_header_sum) +
+             ", computed " + hex64(detail::fnv1a64(bytes.data(), kHeaderSumAt)) + ")",
+         kVersionAt);
+  if (size >= kHeaderBytesV1 + kChecksumBytes &&
+      detail::load_le<std::uint64_t>(bytes.data() + size - kChecksumBytes) ==
+          sum_with_version(bytes, size - kChecksumBytes, 1))
+    fail("the file is corrupt: " + reads + ", but its checksum matches version 1 (the version field is damaged)",
+         kVersionAt);
+  fail("unsupported MT file version " + std::to_string(version) + " (this build reads versions 1 and " +
+           std::to_string(kMtFormatVersion) + "; no checksum shows the file as either, so it is newer or damaged)",
+       kVersionAt);
+}
+
 // Magic, version and counts; for version 2 also the header checksum and the declared size against the real
 // one. Throws IoError; every "truncated" comes from here (or from a version-1 file, see decode_mt).
 Header read_header(std::string_view bytes, const std::string& name) {
@@ -100,10 +144,7 @@ Header read_header(std::string_view bytes, const std::string& name) {
          size);
   Header h;
   h.version = detail::load_le<std::uint32_t>(bytes.data() + kVersionAt);
-  if (h.version != 1 && h.version != kMtFormatVersion)
-    fail("unsupported MT file version " + std::to_string(h.version) + " (this build reads versions 1 and " +
-             std::to_string(kMtFormatVersion) + ")",
-         kVersionAt);
+  if (h.version != kMtFormatVersion) check_version_field(bytes, h.version, fail);
   h.bytes = h.version == 1 ? kHeaderBytesV1 : kHeaderBytes;
   if (size < h.bytes)
     fail("truncated: the file has " + plural(size, "byte", "bytes") + ", less than the " + std::to_string(h.bytes) +

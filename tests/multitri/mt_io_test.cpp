@@ -152,8 +152,9 @@ TEST(MtIo, TruncationNamesWhereTheDataEnds) {
 }
 
 // Damage that keeps the length is a checksum mismatch (of the header, or of the file), never "truncated":
-// the header's own checksum vouches for the size it declares. Bytes of the magic and the version are
-// refused as what they are.
+// the header's own checksum vouches for the size it declares. Bytes of the magic are refused as a bad magic;
+// a damaged version field as a corrupt file, since the header checksum matches with the field read as 2
+// (it read "unsupported MT file version", as if the file were of a newer format).
 TEST(MtIo, EveryFlippedByteIsAChecksumMismatch) {
   const std::string bytes = encode_mt(square_mt(2));
   for (std::size_t i = 0; i < bytes.size(); ++i)
@@ -165,7 +166,12 @@ TEST(MtIo, EveryFlippedByteIsAChecksumMismatch) {
       if (i < testing::kVrmVersionAt) {
         EXPECT_TRUE(contains(e.reason(), "bad magic")) << "byte " << i << ": " << e.what();
       } else if (i < testing::kVrmCountsAt) {
-        EXPECT_TRUE(contains(e.reason(), "unsupported MT file version")) << "byte " << i << ": " << e.what();
+        const std::uint64_t reads = testing::get_le(bad, testing::kVrmVersionAt, 4);
+        EXPECT_TRUE(contains(e.reason(), "the file is corrupt: its format version reads " + std::to_string(reads) +
+                                             ", but its header checksum matches version 2 (the version field is damaged)"))
+            << "byte " << i << ": " << e.what();
+        EXPECT_TRUE(contains(e.what(), "flip.vrm")) << e.what();
+        EXPECT_EQ(e.byte_offset(), testing::kVrmVersionAt);
       } else if (i < testing::kVrmHeaderBytes) {
         EXPECT_TRUE(contains(e.reason(), "checksum mismatch in the header")) << "byte " << i << ": " << e.what();
         EXPECT_EQ(e.byte_offset(), testing::kVrmHeaderSumAt);
@@ -174,6 +180,54 @@ TEST(MtIo, EveryFlippedByteIsAChecksumMismatch) {
         EXPECT_EQ(e.byte_offset(), bytes.size() - 8);
       }
     }
+}
+
+// The checksums tell a damaged version field from a format this build does not know.
+TEST(MtIo, AVersionFieldIsJudgedByTheChecksums) {
+  const std::string v2 = encode_mt(square_mt(2));
+  const std::string v1 = testing::as_version_1(v2);
+  auto expect_error = [](const std::string& bytes, const std::string& name, const std::string& reason) {
+    const IoError e = decode_error(bytes, name);
+    EXPECT_EQ(e.file(), name);
+    EXPECT_TRUE(contains(e.what(), name)) << e.what();
+    EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
+    EXPECT_EQ(e.byte_offset(), testing::kVrmVersionAt) << e.what();
+  };
+  {
+    std::string b = v2;  // a version-2 file whose field reads 1 is not parsed as version 1
+    testing::put_le(b, testing::kVrmVersionAt, 1, 4);
+    expect_error(b, "one.vrm", "the file is corrupt: its format version reads 1, but its header checksum matches version 2");
+  }
+  {
+    std::string b = v2;  // an intact header of version 3: a newer format, not damage
+    testing::put_le(b, testing::kVrmVersionAt, 3, 4);
+    testing::reseal_all(b);
+    expect_error(b, "new.vrm", "unsupported MT file version 3 (this build reads versions 1 and 2; the header checksum matches");
+  }
+  {
+    std::string b = v2;  // version 3 and a damaged vertex count: laid out as version 2, header checksum fails
+    testing::put_le(b, testing::kVrmVersionAt, 3, 4);
+    b[testing::kVrmCountsAt] = static_cast<char>(b[testing::kVrmCountsAt] ^ 0x10);
+    expect_error(b, "two.vrm", "the file is corrupt: its format version reads 3, which this build does not know, "
+                               "and its version-2 header fails its checksum");
+  }
+  for (std::size_t i = testing::kVrmVersionAt; i < testing::kVrmCountsAt; ++i)
+    for (unsigned mask : {0x01u, 0x5au, 0x80u}) {
+      std::string b = v1;  // a damaged version-1 field: the whole file's checksum matches with it read as 1
+      b[i] = static_cast<char>(static_cast<unsigned char>(b[i]) ^ mask);
+      SCOPED_TRACE("byte " + std::to_string(i) + " ^ " + std::to_string(mask));
+      expect_error(b, "old.vrm", "the file is corrupt: its format version reads " +
+                                     std::to_string(testing::get_le(b, testing::kVrmVersionAt, 4)) +
+                                     ", but its checksum matches version 1");
+    }
+  {
+    std::string b = v1;  // version 3 re-sealed, no version-2 header: nothing vouches for either reading
+    testing::put_le(b, testing::kVrmVersionAt, 3, 4);
+    testing::reseal(b);
+    expect_error(b, "odd.vrm", "unsupported MT file version 3 (this build reads versions 1 and 2; no checksum shows");
+    expect_error(v2.substr(0, 20).replace(testing::kVrmVersionAt, 1, 1, '\x07'), "short.vrm",
+                 "unsupported MT file version 7");
+  }
 }
 
 TEST(MtIo, BytesAfterTheDeclaredEndAreRefused) {
@@ -264,6 +318,7 @@ TEST(MtIo, MessagesNameTheProblem) {
   }
   std::string future = bytes;
   future[8] = 3;
+  testing::reseal_all(future);
   try {
     decode_mt(future, "future.vrm");
     FAIL();
