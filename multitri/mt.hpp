@@ -235,19 +235,49 @@ class Mt {
   Frame frame_;
 };
 
-/// Forward ranges over derived relations (std::ranges::forward_range; written out rather than derived from
-/// std::ranges::view_interface, which clang 14 cannot instantiate with libstdc++ 12). empty() and front()
-/// are O(1); size() walks the range.
-class Mt::ParentRange {
+namespace detail {
+/// What Mt::ParentRange and Mt::ChildRange share: the iterator's member types (operator* returns a NodeId by
+/// value, so the iterators are forward iterators for std::ranges and input iterators for the classic
+/// traits), and front(), size() and the bool test written once over the range's begin(), end() and empty().
+struct NodeIteratorTypes {
+  using iterator_concept = std::forward_iterator_tag;
+  using iterator_category = std::input_iterator_tag;
+  using value_type = NodeId;
+  using difference_type = std::ptrdiff_t;
+  using reference = NodeId;
+  using pointer = void;
+};
+
+template <class Range>
+class NodeRangeOps {
  public:
-  class iterator {
+  explicit operator bool() const noexcept { return !self().empty(); }
+  /// The first node. Unchecked: !empty().
+  NodeId front() const noexcept {
+    VARMESH_ASSERT(!self().empty());
+    return *self().begin();
+  }
+  /// Walks the range; its cost is given with Mt::ParentRange and Mt::ChildRange.
+  std::size_t size() const noexcept {
+    std::size_t n = 0;
+    for (auto it = self().begin(), e = self().end(); it != e; ++it) ++n;
+    return n;
+  }
+
+ private:
+  const Range& self() const noexcept { return static_cast<const Range&>(*this); }
+};
+}  // namespace detail
+
+/// Forward ranges over derived relations (std::ranges::forward_range; written out rather than derived from
+/// std::ranges::view_interface, which clang 14 cannot instantiate with libstdc++ 12). Both have begin(),
+/// end(), empty(), front() (the first node; unchecked: !empty()), size() (walks the range) and a bool test.
+///
+/// The parents of a node: empty() and front() are O(1); size() and a full walk are O(number of parents).
+class Mt::ParentRange : public detail::NodeRangeOps<Mt::ParentRange> {
+ public:
+  class iterator : public detail::NodeIteratorTypes {
    public:
-    using iterator_concept = std::forward_iterator_tag;
-    using iterator_category = std::input_iterator_tag;  // operator* returns a value, not a reference
-    using value_type = NodeId;
-    using difference_type = std::ptrdiff_t;
-    using reference = NodeId;
-    using pointer = void;
     iterator() = default;
     iterator(const Mt* mt, const FaceId* p, const FaceId* end) noexcept : mt_(mt), p_(p), end_(end) {
       if (p_ != end_) cur_ = mt_->creator(*p_);
@@ -273,34 +303,18 @@ class Mt::ParentRange {
   iterator begin() const noexcept { return {mt_, pre_.data(), pre_.data() + pre_.size()}; }
   iterator end() const noexcept { return {mt_, pre_.data() + pre_.size(), pre_.data() + pre_.size()}; }
   bool empty() const noexcept { return pre_.empty(); }
-  explicit operator bool() const noexcept { return !empty(); }
-  /// The first parent. Unchecked: !empty().
-  NodeId front() const noexcept {
-    VARMESH_ASSERT(!empty());
-    return *begin();
-  }
-  /// O(number of parents).
-  std::size_t size() const noexcept {
-    std::size_t n = 0;
-    for (iterator it = begin(), e = end(); it != e; ++it) ++n;
-    return n;
-  }
 
  private:
   const Mt* mt_;
   std::span<const FaceId> pre_;
 };
 
-class Mt::ChildRange {
+/// The children of a node: empty() and front() are O(image size) (no child when no face of the image is
+/// removed); size() and a full walk are O(image size + the children's pre-images).
+class Mt::ChildRange : public detail::NodeRangeOps<Mt::ChildRange> {
  public:
-  class iterator {
+  class iterator : public detail::NodeIteratorTypes {
    public:
-    using iterator_concept = std::forward_iterator_tag;
-    using iterator_category = std::input_iterator_tag;  // operator* returns a value, not a reference
-    using value_type = NodeId;
-    using difference_type = std::ptrdiff_t;
-    using reference = NodeId;
-    using pointer = void;
     iterator() = default;
     iterator(const Mt* mt, FaceId f, FaceId b, FaceId e) noexcept : mt_(mt), f_(f), b_(b), e_(e) { settle(); }
     NodeId operator*() const noexcept { return mt_->destroyer(f_); }
@@ -336,20 +350,7 @@ class Mt::ChildRange {
   ChildRange(const Mt* mt, FaceId b, FaceId e) noexcept : mt_(mt), b_(b), e_(e) {}
   iterator begin() const noexcept { return {mt_, b_, b_, e_}; }
   iterator end() const noexcept { return {mt_, e_, b_, e_}; }
-  /// O(image size): no child when no face of the image is removed.
   bool empty() const noexcept { return begin() == end(); }
-  explicit operator bool() const noexcept { return !empty(); }
-  /// The first child. Unchecked: !empty().
-  NodeId front() const noexcept {
-    VARMESH_ASSERT(!empty());
-    return *begin();
-  }
-  /// O(image size + the children's pre-images).
-  std::size_t size() const noexcept {
-    std::size_t n = 0;
-    for (iterator it = begin(), e = end(); it != e; ++it) ++n;
-    return n;
-  }
 
  private:
   const Mt* mt_;
