@@ -18,11 +18,13 @@
 #include <iomanip>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -40,9 +42,22 @@ constexpr int kMaxLevel = 48;
 // Error given to a sample whose distance to an implicit surface could not be measured: refine it.
 constexpr double kUnmeasured = 1e30;
 // Implicit surfaces: a face whose normal is further than this from the gradient of f at its centroid is split
-// (a fold guard; see ImplicitRefiner::is_folded). 60 degrees: coarse faces of a well-polygonized surface stay
+// (a fold guard; see ImplicitRefiner::fold). 60 degrees: coarse faces of a well-polygonized surface stay
 // below 45 (the torus's base faces that span a third of the tube reach 43), a back-facing fold is beyond 90.
 constexpr double kMaxNormalDeviation = std::numbers::pi / 3.0;
+// The fold guard splits a face only while fewer than kMaxFoldLevels of its ancestors in a row had their error
+// within the tolerance (WorkFace::settled), and fewer than kMaxTurnedLevels if the face is turned over (normal
+// more than 90 degrees from the gradient). Newest-vertex bisection halves a face's edges every two levels: the
+// folds it removes (needles standing across a thin part) are gone within 7 levels on the genus-2 surface
+// polygonized on 16 x 12 x 5 cells, while a face turned over on the surface (a pleat of the base) stays turned
+// over in its children at every level.
+constexpr int kMaxFoldLevels = 8;
+constexpr int kMaxTurnedLevels = 4;
+// Implicit surfaces: where the projection of an edge's midpoint onto the surface must land for the edge to be
+// bisected there: within kMaxMidpointOffset of the edge's length from the midpoint along the edge, and at most
+// kMaxHalfEdge of its length from either end (see ImplicitField::bisect_edge).
+constexpr double kMaxMidpointOffset = 0.25;
+constexpr double kMaxHalfEdge = 0.9;
 // polygonize_freudenthal: a grid vertex with a root closer than this fraction of the edge's length moves onto
 // the root (see there). Labelle and Shewchuk snap at up to about a quarter of an edge on their lattice.
 constexpr double kSnapFraction = 0.2;
@@ -58,6 +73,11 @@ std::string point_text(const glm::dvec3& p) { return "(" + num(p.x) + ", " + num
 
 bool finite(const glm::vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+glm::dvec3 unit(const glm::dvec3& v) {
+  const double len = glm::length(v);
+  return len > 0.0 ? v / len : glm::dvec3(0.0);
+}
 
 void check_options(const AdaptiveOptions& o, const std::string& who) {
   if (!std::isfinite(o.tolerance) || !(o.tolerance > 0.0f))
@@ -84,11 +104,14 @@ std::vector<glm::dvec3> barycentric_samples(int k) {
 }
 
 // A face being refined. (apex, e0, e1) has the face's orientation; the marked (refinement) edge is e0 -> e1.
+// settled: how many of its ancestors in a row, up to its parent, had their error within the tolerance (the levels
+// that the fold guard and forced splits added below the last ancestor that needed splitting; at most 255).
 struct WorkFace {
   VertexId apex, e0, e1;
   float error;
   std::uint8_t level;
   bool alive;
+  std::uint8_t settled;
 };
 
 // Newest-vertex bisection driven by face errors, recorded as split nodes of an MtBuilder. Subclasses say
@@ -112,7 +135,7 @@ class Refiner {
   void add_base_face(VertexId c0, VertexId c1, VertexId c2, int k) {
     const std::array<VertexId, 3> c{c0, c1, c2};
     const FaceId id = builder_.add_face(c0, c1, c2);
-    faces_.push_back({c[(k + 2) % 3], c[k], c[(k + 1) % 3], 0.0f, 0, true});
+    faces_.push_back({c[(k + 2) % 3], c[k], c[(k + 1) % 3], 0.0f, 0, true, 0});
     base_.push_back(id);
   }
   // Refines every face above the tolerance, then builds the Mt.
@@ -121,8 +144,10 @@ class Refiner {
   virtual std::uint64_t edge_key(VertexId a, VertexId b) const = 0;
   virtual VertexId midpoint(VertexId e0, VertexId e1) = 0;
   virtual double face_error(FaceId f, VertexId a, VertexId b, VertexId c) = 0;
-  // A face that must be split whatever its error (implicit surfaces: a folded face).
-  virtual bool is_folded(VertexId, VertexId, VertexId) { return false; }
+  // A face that must be split whatever its error (implicit surfaces: a folded face, see ImplicitRefiner::fold);
+  // kTurnedOver: folded so far that it faces away from the surface.
+  enum class Fold { kNone, kFolded, kTurnedOver };
+  virtual Fold fold(VertexId, VertexId, VertexId) { return Fold::kNone; }
   virtual std::vector<glm::vec2> domain() const { return {}; }
 
   const AdaptiveOptions& options_;
@@ -131,7 +156,7 @@ class Refiner {
   std::vector<glm::dvec3> samples_;
 
  private:
-  FaceId add_child(VertexId apex, VertexId e0, VertexId e1, std::uint8_t level);
+  FaceId add_child(VertexId apex, VertexId e0, VertexId e1, std::uint8_t level, std::uint8_t settled);
   void measure(FaceId f);
   void link(FaceId f);
   void unlink(FaceId f);
@@ -148,9 +173,9 @@ class Refiner {
   std::size_t num_folded_ = 0;
 };
 
-FaceId Refiner::add_child(VertexId apex, VertexId e0, VertexId e1, std::uint8_t level) {
+FaceId Refiner::add_child(VertexId apex, VertexId e0, VertexId e1, std::uint8_t level, std::uint8_t settled) {
   const FaceId id = builder_.add_face(apex, e0, e1);
-  faces_.push_back({apex, e0, e1, 0.0f, level, true});
+  faces_.push_back({apex, e0, e1, 0.0f, level, true, settled});
   measure(id);
   link(id);
   max_level_reached_ = std::max<int>(max_level_reached_, level);
@@ -163,10 +188,15 @@ void Refiner::measure(FaceId f) {
   faces_[f].error = static_cast<float>(std::min(e, double(std::numeric_limits<float>::max())));
   if (faces_[f].error > options_.tolerance) {
     work_.push_back(f);
-  } else if (w.level < options_.max_level && is_folded(w.apex, w.e0, w.e1)) {
-    // Below max_level only: the fold guard refines, it never fails a build.
-    work_.push_back(f);
-    ++num_folded_;
+  } else if (w.level < options_.max_level && w.settled < kMaxFoldLevels) {
+    // Below max_level and within kMaxFoldLevels (kMaxTurnedLevels for a face turned over) of the last ancestor
+    // above the tolerance only: the fold guard refines, it never fails a build nor refines without end (run()
+    // counts the folds it leaves).
+    const Fold fold = this->fold(w.apex, w.e0, w.e1);
+    if (fold == Fold::kFolded || (fold == Fold::kTurnedOver && w.settled < kMaxTurnedLevels)) {
+      work_.push_back(f);
+      ++num_folded_;
+    }
   }
 }
 
@@ -246,8 +276,9 @@ void Refiner::split(FaceId t, FaceId u) {
   auto bisect = [&](const WorkFace& w, VertexId m) {
     // Children (m, apex, e0) and (m, e1, apex) keep the orientation and mark the edges opposite m.
     const auto level = static_cast<std::uint8_t>(w.level + 1);
-    created[nc++] = add_child(m, w.apex, w.e0, level);
-    created[nc++] = add_child(m, w.e1, w.apex, level);
+    const auto settled = static_cast<std::uint8_t>(w.error > options_.tolerance ? 0 : std::min(w.settled + 1, 255));
+    created[nc++] = add_child(m, w.apex, w.e0, level, settled);
+    created[nc++] = add_child(m, w.e1, w.apex, level, settled);
   };
   if (u != kInvalid) {
     const WorkFace fu = faces_[u];
@@ -282,6 +313,12 @@ AdaptiveHierarchy Refiner::run(std::size_t num_unpaired) {
   out.num_unpaired_base_faces = num_unpaired;
   out.max_level = max_level_reached_;
   out.num_folded_faces = num_folded_;
+  // A finest face that is still folded was left by one of measure()'s limits (max_level, kMaxFoldLevels or
+  // kMaxTurnedLevels): the others need no second look.
+  for (const WorkFace& w : faces_)
+    if (w.alive && (w.level >= options_.max_level || w.settled >= kMaxTurnedLevels) &&
+        fold(w.apex, w.e0, w.e1) != Fold::kNone)
+      ++out.num_unresolved_folds;
   out.domain = domain();
   std::vector<FaceId> face_new_to_old;
   out.mt = std::move(builder_).build(options_.build, nullptr, &face_new_to_old);
@@ -501,18 +538,84 @@ class ImplicitField {
     return std::isnan(t) ? kUnmeasured : std::abs(t);
   }
 
-  // The projection of p onto the surface; throws naming `what` when neither Newton nor a root along d works.
-  glm::dvec3 project(const glm::dvec3& p, const glm::dvec3& d, double reach, const std::string& what,
-                     std::uint64_t element) const {
+  // The root of f on the segment p + t d, t in (0, reach] (d unit), nearest to p: the first of 16 intervals where
+  // f changes sign, refined by bisection. Returns t, or NaN when f keeps its sign.
+  double ray_root(const glm::dvec3& p, const glm::dvec3& d, double reach) const {
+    constexpr int kSteps = 16;
+    const bool neg = value(p) < 0.0;
+    double a = 0.0;
+    for (int k = 1; k <= kSteps; ++k) {
+      double b = reach * double(k) / kSteps;
+      if ((value(p + b * d) < 0.0) == neg) {
+        a = b;
+        continue;
+      }
+      for (int i = 0; i < 60; ++i) {
+        const double m = 0.5 * (a + b);
+        ((value(p + m * d) < 0.0) == neg ? a : b) = m;
+      }
+      return 0.5 * (a + b);
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+
+  // The projection of p onto the surface: Newton steps, or when they fail a root along d (any length);
+  // nullopt when neither works.
+  std::optional<glm::dvec3> try_project(const glm::dvec3& p, const glm::dvec3& d, double reach) const {
     glm::dvec3 q = p;
     if (newton(q, reach)) return q;
     if (glm::dot(d, d) > 0.0) {
       const glm::dvec3 u = glm::normalize(d);
       if (const double t = line_root(p, u, reach); !std::isnan(t)) return p + t * u;
     }
+    return std::nullopt;
+  }
+
+  // As try_project; throws naming `what` when it fails.
+  glm::dvec3 project(const glm::dvec3& p, const glm::dvec3& d, double reach, const std::string& what,
+                     std::uint64_t element) const {
+    if (const std::optional<glm::dvec3> q = try_project(p, d, reach)) return *q;
     throw InvalidInput(who_ + ": cannot place " + what + " " + point_text(p) +
                            " on the surface (the gradient vanishes and f does not change sign nearby)",
                        element);
+  }
+
+  // The point that bisects the edge (a, b) of the surface: its midpoint projected onto the surface (project(),
+  // with the ends' gradients averaged as the fallback direction). Where the surface is thinner than the edge is
+  // long (a chord across a thin part, its ends' normals far apart), that projection can land next to one end or
+  // past it, and bisecting there would not shorten the edge (see between_ends). Then the surface is searched
+  // from the midpoint across the edge, along the ends' unit normals averaged and made perpendicular to the edge
+  // (first towards the side where f changes sign, then the other), within the reach that keeps both halves at
+  // most kMaxHalfEdge of the edge: for a tube the root on the side the normals face is the midpoint of the arc
+  // between the ends. Falls back to the projection; nullopt when nothing is found.
+  std::optional<glm::dvec3> bisect_edge(const glm::dvec3& a, const glm::dvec3& b) const {
+    const double len = glm::length(b - a);
+    const glm::dvec3 m = 0.5 * (a + b);
+    const glm::dvec3 ga = gradient(a), gb = gradient(b);
+    const std::optional<glm::dvec3> projected = try_project(m, ga + gb, std::max(len, 1e-30));
+    if (!(len > 0.0) || (projected && between_ends(*projected, a, b))) return projected;
+    const glm::dvec3 along = (b - a) / len;
+    glm::dvec3 d = unit(ga) + unit(gb);
+    d -= glm::dot(d, along) * along;
+    if (glm::length(d) > 1e-6) {
+      d = glm::normalize(d);
+      const double reach = len * std::sqrt(kMaxHalfEdge * kMaxHalfEdge - 0.25);
+      const double first = value(m) < 0.0 ? 1.0 : -1.0;  // inside: the surface lies the way the normals point
+      for (const double sign : {first, -first})
+        if (const double t = ray_root(m, sign * d, reach); !std::isnan(t)) return m + sign * t * d;
+    }
+    return projected;
+  }
+
+  // Whether q, the surface point found for edge (a, b), lies between the ends: at most kMaxMidpointOffset of the
+  // edge's length from the midpoint along the edge and at most kMaxHalfEdge of it from either end, so that the
+  // halves are shorter than the edge. A projection that lands elsewhere went around a thin part of the surface.
+  static bool between_ends(const glm::dvec3& q, const glm::dvec3& a, const glm::dvec3& b) {
+    const double len = glm::length(b - a);
+    if (!(len > 0.0)) return true;  // nothing to shorten
+    const double offset = std::abs(glm::dot(q - 0.5 * (a + b), b - a)) / len;
+    return offset <= kMaxMidpointOffset * len && glm::length(q - a) <= kMaxHalfEdge * len &&
+           glm::length(q - b) <= kMaxHalfEdge * len;
   }
 
  private:
@@ -545,14 +648,11 @@ class ImplicitRefiner final : public Refiner {
 
   VertexId midpoint(VertexId e0, VertexId e1) override {
     const glm::dvec3 a(positions_[e0]), b(positions_[e1]);
-    const double len = glm::length(b - a);
-    const glm::dvec3 m = 0.5 * (a + b);
-    // Fallback direction: the gradient at the endpoints (their normals) averaged.
-    glm::dvec3 d = field_.gradient(a) + field_.gradient(b);
-    const glm::dvec3 q = field_.project(m, d, std::max(len, 1e-30), "the midpoint of edge (" + std::to_string(e0) +
-                                                                        ", " + std::to_string(e1) + ")",
-                                        positions_.size());
-    return add_vertex(glm::vec3(q));
+    if (const std::optional<glm::dvec3> q = field_.bisect_edge(a, b)) return add_vertex(glm::vec3(*q));
+    throw InvalidInput(who_ + ": cannot place the midpoint of edge (" + std::to_string(e0) + ", " +
+                           std::to_string(e1) + ") " + point_text(0.5 * (a + b)) +
+                           " on the surface (the gradient vanishes and f does not change sign nearby)",
+                       positions_.size());
   }
 
   double face_error(FaceId, VertexId a, VertexId b, VertexId c) override {
@@ -569,16 +669,18 @@ class ImplicitRefiner final : public Refiner {
   // kMaxNormalDeviation from the gradient at its centroid is split too, while its longest edge exceeds the
   // tolerance: a fold from a projected midpoint (the sagitta of a long chord exceeding the face's width) goes
   // away as the faces shrink, a face turned over in the surface's tangent plane (a base that does not resolve
-  // the surface) never does, and the bound on edge lengths keeps its refinement finite, about (area /
-  // tolerance^2) faces. side_ is +1 when the base's normals point towards f > 0, -1 when towards f < 0.
-  bool is_folded(VertexId a, VertexId b, VertexId c) override {
+  // the surface) never does; Refiner::measure stops the guard after kMaxFoldLevels (kMaxTurnedLevels for
+  // kTurnedOver, a normal more than 90 degrees off). side_ is +1 when the base's normals point towards f > 0,
+  // -1 when towards f < 0.
+  Fold fold(VertexId a, VertexId b, VertexId c) override {
     const glm::dvec3 pa(positions_[a]), pb(positions_[b]), pc(positions_[c]);
     const double longest = std::max({glm::length(pb - pa), glm::length(pc - pb), glm::length(pa - pc)});
-    if (!(longest > double(options_.tolerance))) return false;
+    if (!(longest > double(options_.tolerance))) return Fold::kNone;
     const glm::dvec3 g = field_.gradient((pa + pb + pc) / 3.0);
     const double len = glm::length(g);
-    if (!(len > 0.0)) return false;  // no normal to compare with (a critical point of f)
-    return side_ * glm::dot(face_normal(pa, pb, pc), g) < std::cos(kMaxNormalDeviation) * len;
+    if (!(len > 0.0)) return Fold::kNone;  // no normal to compare with (a critical point of f)
+    const double cosine = side_ * glm::dot(face_normal(pa, pb, pc), g) / len;
+    return cosine < 0.0 ? Fold::kTurnedOver : cosine < std::cos(kMaxNormalDeviation) ? Fold::kFolded : Fold::kNone;
   }
 
  private:
@@ -857,6 +959,35 @@ void check_implicit(const ImplicitSurface& s, const std::string& who) {
   }
   if (total > (std::size_t(1) << 21))
     throw InvalidInput(who + ": " + std::to_string(total) + " grid cells exceed 2^21");
+}
+
+// Whether an edge of the mesh has its midpoint projected onto the surface somewhere other than between its ends
+// (ImplicitField::between_ends). Edges whose midpoint cannot be projected are left to the refiner. O(edges)
+// projections.
+bool has_unresolved_edge(const TriMesh& mesh, const ImplicitField& field) {
+  std::unordered_set<std::uint64_t> seen;
+  seen.reserve(mesh.indices.size());
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Index i = mesh.corner(f, k), j = mesh.corner(f, (k + 1) % 3);
+      if (!seen.insert(undirected_edge_key(i, j)).second) continue;
+      const glm::dvec3 a(mesh.positions[i]), b(mesh.positions[j]);
+      const double len = glm::length(b - a);
+      const std::optional<glm::dvec3> q =
+          field.try_project(0.5 * (a + b), field.gradient(a) + field.gradient(b), std::max(len, 1e-30));
+      if (q && !ImplicitField::between_ends(*q, a, b)) return true;
+    }
+  return false;
+}
+
+// Whether twice the cells per axis stays within polygonize_freudenthal's limits (check_implicit).
+bool can_double(const std::array<int, 3>& cells) {
+  std::size_t total = 1;
+  for (const int c : cells) {
+    if (2 * c > 256) return false;
+    total *= 2 * static_cast<std::size_t>(c);
+  }
+  return total <= (std::size_t(1) << 21);
 }
 
 AdaptiveHierarchy implicit_from_base(const ImplicitSurface& surface, const TriMesh& base, bool project,
@@ -1251,9 +1382,22 @@ TriMesh polygonize_freudenthal(const ImplicitSurface& surface) {
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const AdaptiveOptions& options) {
   const std::string who = "build_adaptive_implicit";
   check_options(options, who);
-  const TriMesh base = polygonize_freudenthal(surface);
+  ImplicitSurface grid = surface;
+  TriMesh base = polygonize_freudenthal(grid);
   if (base.num_faces() == 0) throw InvalidInput(who + ": the surface does not cross the grid (empty polygonization)");
-  return implicit_from_base(surface, base, false, options, who);
+  // A base edge whose midpoint projects onto the surface away from the edge's middle crosses a part of the
+  // surface thinner than the grid (the genus-2 surface's ends on 14 x 10 x 4: one layer of grid vertices inside,
+  // chords across 150 degrees of the tube): bisection cannot follow the surface there (see
+  // ImplicitField::bisect_edge). Such a grid is polygonized again with twice the cells per axis, within
+  // polygonize_freudenthal's limits.
+  const ImplicitField field(surface, glm::length(surface.box_hi - surface.box_lo), who);
+  while (has_unresolved_edge(base, field) && can_double(grid.cells)) {
+    for (int& c : grid.cells) c *= 2;
+    base = polygonize_freudenthal(grid);
+  }
+  AdaptiveHierarchy out = implicit_from_base(grid, base, false, options, who);
+  out.base_cells = grid.cells;
+  return out;
 }
 
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const TriMesh& base,

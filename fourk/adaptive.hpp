@@ -25,7 +25,19 @@
 ///   (6 tetrahedra per cell around the main diagonal; marching tetrahedra with roots on grid edges found by
 ///   bisection, so base vertices lie on the surface; a grid vertex within 0.2 of an edge's length of a root is
 ///   snapped onto it, so that roots next to a grid vertex make no needle faces), or a caller's base mesh whose
-///   vertices are projected.
+///   vertices are projected. A new vertex is the midpoint of the split edge projected onto the surface (Newton
+///   steps along the gradient) when that lands between the edge's ends: at most a quarter of the edge's length
+///   from the midpoint along the edge and at most 0.9 of it from either end. Across a part of the surface
+///   thinner than the edge, the projection can land next to one end or past it, and bisecting there would not
+///   shorten the edge (on the genus-2 surface of the tests polygonized on 14 x 10 x 4 cells it refined to
+///   max_level at tolerance 0.2 and missed 0.1); the new vertex is then the root of f on the line through the
+///   midpoint along the ends' normals averaged (made perpendicular to the edge), within the reach that keeps
+///   both halves at most 0.9 of the edge: on a tube, the middle of the arc between the ends.
+///   A grid whose polygonization has an edge whose midpoint does not project between its ends is too coarse
+///   for the surface (its chords cross a thin part); build_adaptive_implicit(surface, options) then
+///   polygonizes on twice the cells per axis, while the grid stays within polygonize_freudenthal's limits, and
+///   reports the grid in AdaptiveHierarchy::base_cells (the genus-2 surface: 14 x 10 x 4 -> 28 x 20 x 8). A
+///   caller's base is used as given: where it does not resolve the surface, faces may stay turned over.
 ///   The faces are paired across shared edges by a maximum matching of the dual graph (greedy on the longest
 ///   edges, then Edmonds augmenting paths) and a pair marks its shared edge. A face left unpaired marks its
 ///   longest border edge if it has one (a 1 -> 2 split), otherwise its longest edge, whose neighbour is
@@ -50,15 +62,20 @@
 ///   when its normal is more than 60 degrees from the gradient of f at its centroid and its longest edge is
 ///   longer than the tolerance (the fold guard; AdaptiveHierarchy::num_folded_faces counts these faces). Such
 ///   folds come from bisecting a long chord whose sagitta exceeds the face's width and go away as faces
-///   shrink; the edge bound keeps the refinement finite where they do not (a base that does not resolve the
-///   surface, whose faces are turned over in its tangent plane). 60 degrees lies between the deviation of a
-///   coarse but sound face (the torus's base faces that span a third of its tube reach 43) and a face seen from
-///   behind (90). The error of a face split by the guard alone stays its distance error.
+///   shrink (on the genus-2 surface polygonized on 16 x 12 x 5 cells, within 7 levels). Where they do not (a
+///   base that does not resolve the surface, whose faces are turned over in its tangent plane and stay so in
+///   their children), the guard stops: it splits a face only while fewer than 8 of its ancestors in a row had
+///   their error within the tolerance, 4 if the face is turned over (normal more than 90 degrees from the
+///   gradient), so it adds at most 8 levels below the faces the error needs instead of refining a fold that
+///   bisection cannot remove down to max_level; AdaptiveHierarchy::num_unresolved_folds counts the finest faces
+///   it left folded. 60 degrees lies between the deviation of a coarse but sound face (the
+///   torus's base faces that span a third of its tube reach 43) and a face seen from behind (90). The error of
+///   a face split by the guard alone stays its distance error.
 /// An MT node's error is the largest error of its pre-image faces (MtBuilder then saturates it). So
 /// extract() with Criterion::object_error(e), e >= tolerance, gives a mesh whose faces all have error <= e,
 /// and every face of the finest front has error <= tolerance (implicit surfaces: and, when its longest edge is
-/// longer than the tolerance, a normal within 60 degrees of the gradient). Between sample points nothing is
-/// guaranteed.
+/// longer than the tolerance and num_unresolved_folds is 0, a normal within 60 degrees of the gradient).
+/// Between sample points nothing is guaranteed.
 ///
 /// Figure 20 counts (tests/fourk/adaptive_test.cpp, default sample_order 4): torus_parametric() at tolerance
 /// 0.0685 gives 528 finest triangles (the paper shows 516; the count jumps 464 -> 528 between 0.069 and
@@ -157,6 +174,13 @@ struct AdaptiveHierarchy {
   std::size_t num_finest_faces = 0;       ///< faces of the drain (the finest front)
   std::size_t num_unpaired_base_faces = 0;  ///< implicit: base faces the matching left unpaired
   std::size_t num_folded_faces = 0;       ///< implicit: faces split by the fold guard alone (error in tolerance)
+  /// implicit: finest faces the fold guard still holds for (normal more than 60 degrees from the gradient, longest
+  /// edge longer than the tolerance) but stopped splitting (its level limit or max_level; see the header). 0
+  /// when every fold was resolved.
+  std::size_t num_unresolved_folds = 0;
+  /// build_adaptive_implicit from a grid: the cells of the grid the base was polygonized on (ImplicitSurface::cells,
+  /// doubled per axis while the polygonization did not resolve the surface; see the header). {0, 0, 0} otherwise.
+  std::array<int, 3> base_cells{0, 0, 0};
   int max_level = 0;                      ///< deepest face level reached
 };
 
@@ -192,19 +216,22 @@ AdaptiveHierarchy build_adaptive_cylindrical(const CylindricalScan& scan, const 
 /// times (once without snaps, then until no snap is undone).
 TriMesh polygonize_freudenthal(const ImplicitSurface& surface);
 
-/// Adaptive refinement of an implicit surface from polygonize_freudenthal(surface). New vertices are edge
-/// midpoints projected onto the surface (Newton steps along the gradient). Faces are split while their error
-/// exceeds the tolerance or the fold guard holds (see the header comment). Throws InvalidInput: as
+/// Adaptive refinement of an implicit surface from polygonize_freudenthal(surface), or from the polygonization
+/// on twice (four, eight times...) the cells per axis when that grid does not resolve the surface (reported in
+/// base_cells; see the header comment). New vertices are edge midpoints projected onto the surface (Newton
+/// steps along the gradient; across thin parts, the root along the ends' normals). Faces are split while their
+/// error exceeds the tolerance or the fold guard holds (see the header comment). Throws InvalidInput: as
 /// polygonize_freudenthal; an empty polygonization; bad options; f or its gradient not finite at a point
 /// the builder visits (named); a midpoint that cannot be projected; tolerance not met at max_level or more
-/// than max_faces faces. Cost: O(F k^2) projections (each a few evaluations of f and its gradient).
+/// than max_faces faces. Cost: one projection per base edge and, per doubling, a polygonization with 8 times
+/// the cells; then O(F k^2) projections (each a few evaluations of f and its gradient).
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const AdaptiveOptions& options);
 
-/// As above from a caller's base mesh (e.g. a coarse sphere); its vertices are projected onto the surface
-/// first, and its marking comes from the matching. The base may face either way: the fold guard compares
-/// normals with the side most of its area faces. Throws InvalidInput also when base.validate() fails, the
-/// base is empty, has a degenerate face (repeated corner), an edge used twice in one direction (non-manifold
-/// or inconsistently oriented; named by face), or a vertex that cannot be projected.
+/// As above from a caller's base mesh (e.g. a coarse sphere), used as given (no grid to refine): its vertices
+/// are projected onto the surface first, and its marking comes from the matching. The base may face either
+/// way: the fold guard compares normals with the side most of its area faces. Throws InvalidInput also when
+/// base.validate() fails, the base is empty, has a degenerate face (repeated corner), an edge used twice in one
+/// direction (non-manifold or inconsistently oriented; named by face), or a vertex that cannot be projected.
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const TriMesh& base,
                                           const AdaptiveOptions& options);
 

@@ -324,6 +324,8 @@ TEST(AdaptiveImplicit, TorusMeetsToleranceAndStaysOnTheSurface) {
   EXPECT_EQ(h.num_finest_faces, 1322u);  // regression; Figure 20(b) has 1324
   EXPECT_EQ(h.num_unpaired_base_faces, 0u);  // a closed surface has a perfect matching of its faces
   EXPECT_TRUE(h.domain.empty());
+  EXPECT_EQ(h.base_cells, s.cells);  // its 4 x 4 x 2 grid resolves it
+  EXPECT_EQ(h.num_unresolved_folds, 0u);
 
   const MtFront front = finest_front(h.mt);
   ASSERT_NO_THROW(front.validate());
@@ -703,6 +705,7 @@ TEST(AdaptiveImplicit, FinestFacesFollowTheSurface) {
       const FaceShapes shapes = face_shapes(mesh, c.gradient);
       EXPECT_LE(shapes.max_normal_angle, 60.0 + 1e-6);
       EXPECT_EQ(shapes.num_facing_away, 0u);
+      EXPECT_EQ(h.num_unresolved_folds, 0u);
       EXPECT_GE(shapes.min_quality, c.min_quality);
       if (c.name.starts_with("torus")) {
         // Against the torus's own normal (the nearest point's) as well.
@@ -728,6 +731,8 @@ TEST(AdaptiveImplicit, FoldGuardSplitsFoldedFaces) {
     SCOPED_TRACE("tolerance " + std::to_string(tol));
     const AdaptiveHierarchy h = build_adaptive_implicit(genus2, with_tolerance(tol));
     EXPECT_GT(h.num_folded_faces, 20u);
+    EXPECT_EQ(h.num_unresolved_folds, 0u);  // folds the guard removes, within its level limit
+    EXPECT_EQ(h.base_cells, genus2.cells);
     const TriMesh mesh = finest_front(h.mt).to_mesh();
     ASSERT_TRUE(conforming(mesh));
     EXPECT_EQ(euler_characteristic(mesh), -2);
@@ -746,6 +751,138 @@ TEST(AdaptiveImplicit, FoldGuardSplitsFoldedFaces) {
     const FaceShapes back = face_shapes(finest_front(backward.mt).to_mesh(), inward);
     EXPECT_LE(back.max_normal_angle, 60.0 + 1e-6);
     EXPECT_EQ(back.num_facing_away, 0u);
+  }
+}
+
+// Whether a point of the surface f = 0 lies within `reach` of p, found without the builder's projection: f takes
+// the other sign than at p somewhere on the segment of length 2 reach through p along the gradient of f at p
+// (sampled 64 times). A sufficient condition for the distance from p to the surface to be at most reach.
+template <class Value, class Gradient>
+bool surface_within(const glm::dvec3& p, double reach, Value&& value, Gradient&& gradient) {
+  const double f0 = value(p);
+  if (f0 == 0.0) return true;
+  const glm::dvec3 g = gradient(p);
+  if (!(glm::length(g) > 0.0)) return false;
+  const glm::dvec3 n = glm::normalize(g);
+  for (int k = 1; k <= 32; ++k)
+    for (const double sign : {1.0, -1.0})
+      if ((value(p + sign * reach * double(k) / 32.0 * n) < 0.0) != (f0 < 0.0)) return true;
+  return false;
+}
+
+// The order-4 sample points of the finest faces of an implicit hierarchy that have no surface point within the
+// tolerance by surface_within.
+std::size_t num_far_samples(const AdaptiveHierarchy& h, const ImplicitSurface& s, float tol) {
+  std::size_t out = 0;
+  const auto samples = sample_points(4);
+  for (const FaceId f : adaptive_finest_faces(h))
+    for (const auto& w : samples) out += !surface_within(flat_point(h.mt, f, w), tol + slack(tol), s.value, s.gradient);
+  return out;
+}
+
+double mesh_area(const TriMesh& m) {
+  double area = 0.0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const glm::dvec3 a(m.positions[m.corner(f, 0)]), b(m.positions[m.corner(f, 1)]), c(m.positions[m.corner(f, 2)]);
+    area += 0.5 * glm::length(glm::cross(b - a, c - a));
+  }
+  return area;
+}
+
+// The genus-2 surface on 14 x 10 x 4 cells: one layer of grid vertices inside its ends, so the polygonization's
+// chords cross up to 150 degrees of the tube there, and the midpoints of some of them projected onto the surface
+// next to one end (the new edge to the other end as long as the old one). Refinement then never resolved them:
+// 768 faces at 0.5 with two base faces turned over (94.5 degrees from the gradient), 445,606 at 0.2 (max_level
+// 40; 261,198 split by the fold guard), "tolerance 0.1 not met at max_level 40" at 0.1 and below. Now the grid
+// is polygonized again at 28 x 20 x 8, whose edges all bisect between their ends. Checked: the finest front is
+// a closed genus-2 surface; every sample point within the tolerance of the surface (found independently of the
+// builder); no face turned over and every face within 60 degrees of the gradient at its centroid; at most the
+// base faces plus area / tolerance^2 faces (bisection of faces that are at least the tolerance across; the area
+// from a polygonization on 48 x 36 x 16 cells).
+TEST(AdaptiveImplicit, ThinPartsOfACoarseGridAreResolvedAtEveryTolerance) {
+  const ImplicitSurface genus2 = genus2_implicit({14, 10, 4});
+  const double area = mesh_area(polygonize_freudenthal(genus2_implicit({48, 36, 16})));
+  for (const float tol : {0.5f, 0.3f, 0.2f, 0.1f, 0.05f, 0.02f}) {
+    SCOPED_TRACE("tolerance " + std::to_string(tol));
+    AdaptiveHierarchy h;
+    ASSERT_NO_THROW(h = build_adaptive_implicit(genus2, with_tolerance(tol)));
+    ASSERT_NO_THROW(h.mt.validate());
+    const TriMesh mesh = finest_front(h.mt).to_mesh();
+    std::vector<std::array<Index, 2>> border;
+    ASSERT_TRUE(conforming(mesh, &border));
+    EXPECT_TRUE(border.empty());
+    EXPECT_EQ(euler_characteristic(mesh), -2);
+    for (const FaceId f : adaptive_finest_faces(h)) ASSERT_LE(h.face_error[f], tol) << "face " << f;
+    EXPECT_EQ(num_far_samples(h, genus2, tol), 0u);
+    const FaceShapes shapes = face_shapes(mesh, genus2.gradient);
+    EXPECT_EQ(shapes.num_facing_away, 0u);
+    EXPECT_LE(shapes.max_normal_angle, 60.0);
+    EXPECT_EQ(h.num_unresolved_folds, 0u);
+    EXPECT_LE(double(h.num_finest_faces), double(h.num_base_faces) + area / (double(tol) * double(tol)));
+    // The grid it polygonized: the requested one refined by a power of two on every axis.
+    ImplicitSurface grid = genus2;
+    grid.cells = h.base_cells;
+    EXPECT_EQ(polygonize_freudenthal(grid).num_faces(), h.num_base_faces);
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(h.base_cells[d] % genus2.cells[d], 0) << "axis " << d;
+  }
+}
+
+// The same coarse polygonization given as a caller's base, which the builder uses as it is: midpoints whose
+// projection does not land between the edge's ends are placed on the surface across the edge instead, so
+// bisection shortens every edge and meets the tolerance with few faces (it was 445,602 faces at 0.2 and "not met
+// at max_level 40" below). Where the base does not resolve the surface, faces may stay turned over; that is not
+// checked here.
+TEST(AdaptiveImplicit, CallerBaseAcrossThinPartsMeetsTheTolerance) {
+  const ImplicitSurface genus2 = genus2_implicit({14, 10, 4});
+  const TriMesh base = polygonize_freudenthal(genus2);
+  const double area = mesh_area(polygonize_freudenthal(genus2_implicit({48, 36, 16})));
+  for (const float tol : {0.2f, 0.1f, 0.05f}) {
+    SCOPED_TRACE("tolerance " + std::to_string(tol));
+    AdaptiveHierarchy h;
+    ASSERT_NO_THROW(h = build_adaptive_implicit(genus2, base, with_tolerance(tol)));
+    ASSERT_NO_THROW(h.mt.validate());
+    EXPECT_EQ(h.num_base_faces, base.num_faces());
+    EXPECT_EQ(h.base_cells, (std::array<int, 3>{0, 0, 0}));
+    const TriMesh mesh = finest_front(h.mt).to_mesh();
+    ASSERT_TRUE(conforming(mesh));
+    EXPECT_EQ(euler_characteristic(mesh), -2);
+    for (const FaceId f : adaptive_finest_faces(h)) ASSERT_LE(h.face_error[f], tol) << "face " << f;
+    EXPECT_EQ(num_far_samples(h, genus2, tol), 0u);
+    EXPECT_LE(double(h.num_finest_faces), double(h.num_base_faces) + area / (double(tol) * double(tol)));
+  }
+}
+
+// A base turned over on the surface: the octahedron with its top vertex tipped 100 degrees towards +x, so that
+// faces around it face into the sphere. Bisection cannot unfold them (their children are turned over too), so
+// the fold guard must stop: it used to split them until they were shorter than the tolerance, 516 times the
+// faces the sound octahedron needs at 0.01 (495,794) and more than max_faces at 0.002. Now it stops within
+// 8 levels (4 for faces turned over) of the last face above the tolerance, at most 2^8 times the sound count,
+// and reports the faces it left folded.
+TEST(AdaptiveImplicit, FoldGuardStopsOnABaseTurnedOver) {
+  ImplicitSurface sphere;
+  sphere.value = [](const glm::dvec3& p) { return glm::dot(p, p) - 1.0; };
+  sphere.gradient = [](const glm::dvec3& p) { return 2.0 * p; };
+  sphere.box_lo = glm::dvec3(-1.3);
+  sphere.box_hi = glm::dvec3(1.3);
+  TriMesh octahedron;
+  octahedron.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  octahedron.indices = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  TriMesh tipped = octahedron;
+  const float tip = 100.0f * std::numbers::pi_v<float> / 180.0f;
+  tipped.positions[4] = {std::sin(tip), 0.0f, std::cos(tip)};
+  for (const float tol : {0.01f, 0.002f}) {
+    SCOPED_TRACE("tolerance " + std::to_string(tol));
+    const AdaptiveHierarchy sound = build_adaptive_implicit(sphere, octahedron, with_tolerance(tol));
+    EXPECT_EQ(sound.num_unresolved_folds, 0u);
+    AdaptiveHierarchy h;
+    ASSERT_NO_THROW(h = build_adaptive_implicit(sphere, tipped, with_tolerance(tol)));
+    ASSERT_NO_THROW(h.mt.validate());
+    EXPECT_GT(h.num_unresolved_folds, 0u);
+    EXPECT_LE(h.num_finest_faces, 256 * sound.num_finest_faces);
+    EXPECT_LT(h.max_level, with_tolerance(tol).max_level);
+    for (const FaceId f : adaptive_finest_faces(h)) ASSERT_LE(h.face_error[f], tol) << "face " << f;
+    // Not a false alarm: some finest faces do face into the sphere.
+    EXPECT_GT(face_shapes(finest_front(h.mt).to_mesh(), [](const glm::dvec3& p) { return p; }).num_facing_away, 0u);
   }
 }
 
