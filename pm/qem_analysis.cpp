@@ -15,12 +15,15 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <exception>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <span>
 #include <string>
@@ -38,6 +41,9 @@
 namespace varmesh {
 
 namespace {
+
+// QemOptions::progress is called every kProgressStep collapses (a power of two: the loop tests a mask).
+constexpr std::size_t kProgressStep = 4096;
 
 // enclose(a, NormalCone{n, 1}) of multitri/bounds.cpp for one unit normal n, bit for bit: the normal's
 // half-angle acos(1) is exactly 0, so its acos is skipped, and a normal already inside the cone (a dot
@@ -207,6 +213,7 @@ class Analysis {
 
  private:
   struct Part;
+  struct PartSync;
   // Variable-arity relation per node (faces around it, candidate edges at it): a run of a pool. A new node's
   // run is appended; the runs of dead nodes are left behind (no allocation per collapse).
   struct Run {
@@ -319,6 +326,9 @@ class Analysis {
   // Parallel analysis (QemOptions::threads): the number of parts to use (1: serial), and the run of them.
   std::size_t parallel_parts() const;
   void run_parts(std::size_t parts, QemStats& stats);
+  // In a part: tells the caller's thread that kProgressStep more collapses are done (or stops the part, by
+  // throwing PartStopped, once the caller has given up).
+  void report_to_caller();
 
   ManifoldInput in_;
   QemOptions opt_;
@@ -371,6 +381,8 @@ class Analysis {
   // Added to alive_vertices_ in the depth budget's count of roots: in a part of a parallel analysis, the
   // vertices of the other parts (see run_parts()).
   std::size_t alive_bias_ = 0;
+  // In a part of a parallel analysis: where it reports its progress (run_parts()); null otherwise.
+  PartSync* sync_ = nullptr;
 };
 
 // Each branch returns its own prvalue: built in place in the caller's object, with no copy through a local
@@ -1075,6 +1087,8 @@ void Analysis::init_leaf_bounds() {
 // finish and the smallest base mesh as in a serial run). A part's leaves keep the whole mesh's unit
 // coordinates, quadrics and bounds: those of a vertex that is not on the seam depend only on its own faces,
 // which are all in its part, and are summed in the same order; the seam vertices' are computed on the whole.
+// Each part runs on a thread of its own; the caller's thread meanwhile computes the seam vertices' state and
+// then passes the parts' progress reports on to QemOptions::progress (PartSync).
 struct Analysis::Part {
   std::vector<Index> faces;  // the part's faces (ids of the whole), ascending
   std::vector<Index> l2g;    // part slot -> slot of the whole
@@ -1084,8 +1098,32 @@ struct Analysis::Part {
   QemStats stats;
   Index base = 0;            // node id of its first collapse in the whole
   std::size_t ring_base = 0; // its first stored ring item in the whole
-  std::exception_ptr error;
+  std::exception_ptr error;  // what the part threw (not PartStopped)
 };
+
+// What the parts share with the caller's thread: the collapses they report (kProgressStep at a time, so that
+// QemOptions::progress can be called on the caller's thread while they run), how many have ended, and a flag
+// that stops them at their next report once the analysis has failed (an exception of the callback, of the
+// caller's own share, or of another part).
+struct Analysis::PartSync {
+  std::mutex m;
+  std::condition_variable cv;
+  std::size_t reported = 0;  // guarded by m
+  std::size_t ended = 0;     // guarded by m
+  std::atomic<bool> stop{false};
+};
+
+// Thrown in a part told to stop: the exception that stopped it is the one the analysis reports.
+struct PartStopped {};
+
+void Analysis::report_to_caller() {
+  if (sync_->stop.load(std::memory_order_relaxed)) throw PartStopped{};
+  {
+    std::lock_guard<std::mutex> lock(sync_->m);
+    sync_->reported += kProgressStep;
+  }
+  sync_->cv.notify_one();
+}
 
 // More threads than this are not used (each part runs on one).
 constexpr std::size_t kMaxParts = 256;
@@ -1100,24 +1138,51 @@ std::size_t Analysis::parallel_parts() const {
 
 void Analysis::run_parts(std::size_t k, QemStats& stats) {
   std::vector<Part> parts(k);
-  // fn(t) for each part, parts 1.. on threads of their own and part 0 on this one after on_caller(); an
-  // exception is kept in its part (on_caller's is rethrown once every thread is joined).
-  auto run_in_threads = [&](auto&& fn, auto&& on_caller) {
+  PartSync sync;
+  std::size_t relayed = 0;  // collapses passed on to QemOptions::progress
+  // fn(t) for each part on a thread of its own, while this thread runs on_caller() and then, with `relay`,
+  // passes the parts' reports on to QemOptions::progress (on this thread: the callback need not be
+  // thread-safe), every kProgressStep collapses as a serial run does. The first exception (this thread's, or
+  // a part's) stops the other parts at their next report; it is rethrown once every thread is joined.
+  auto run_in_threads = [&](auto&& fn, auto&& on_caller, bool relay) {
     auto guarded = [&](std::size_t t) {
       try {
         fn(t);
+      } catch (const PartStopped&) {
       } catch (...) {
         parts[t].error = std::current_exception();
+        sync.stop.store(true, std::memory_order_relaxed);
       }
+      {
+        std::lock_guard<std::mutex> lock(sync.m);
+        ++sync.ended;
+      }
+      sync.cv.notify_one();
     };
+    sync.ended = 0;
     std::vector<std::thread> threads;
     std::exception_ptr caller_error;
     try {
-      for (std::size_t t = 1; t < k; ++t) threads.emplace_back(guarded, t);
+      threads.reserve(k);
+      for (std::size_t t = 0; t < k; ++t) threads.emplace_back(guarded, t);
       on_caller();
-      guarded(0);
+      if (relay) {
+        std::unique_lock<std::mutex> lock(sync.m);
+        for (;;) {
+          sync.cv.wait(lock, [&] { return sync.reported > relayed || sync.ended == k; });
+          if (sync.reported == relayed) break;  // every part has ended, and its reports are passed on
+          const std::size_t upto = sync.reported;
+          lock.unlock();
+          while (relayed < upto) {
+            relayed += kProgressStep;
+            opt_.progress(relayed, nl_ - relayed);
+          }
+          lock.lock();
+        }
+      }
     } catch (...) {
       caller_error = std::current_exception();
+      sync.stop.store(true, std::memory_order_relaxed);
     }
     for (std::thread& th : threads) th.join();
     if (caller_error) std::rethrow_exception(caller_error);
@@ -1193,6 +1258,12 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
   // runs on the whole, and at least 1.5 so that the whole ends at the targets, not the parts), the band
   // included; no target (an error limit or the smallest base mesh) lets them go as far as they can.
   const double factor = std::max(opt_.lt_finish, 1.5);
+  // The parts' options, copied here rather than on their threads (the copy of the progress callback runs the
+  // caller's code).
+  QemOptions part_options = opt_;
+  part_options.progress = {};
+  part_options.threads = 1;
+  part_options.lt_finish = 0.0;
 
   auto build = [&](std::size_t t) {
     Part& P = parts[t];
@@ -1221,15 +1292,16 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
       }
       part_band_faces += in_band;
     }
-    QemOptions o = opt_;
-    o.progress = {};
-    o.threads = 1;
-    o.lt_finish = 0.0;
+    QemOptions o = part_options;
+    // The part's share of a target: its fixed elements (the band's) and its part of the rest, scaled. A share
+    // of at least the part's size leaves the part as it is; it is compared in double, as a target near
+    // SIZE_MAX times the factor does not fit a size_t (the conversion gave a small target).
     auto share = [&](std::size_t target, std::size_t part_total, std::size_t part_fixed, std::size_t total, std::size_t fixed) {
       if (target == 0) return std::size_t{0};
       const double free_total = static_cast<double>(std::max<std::size_t>(1, total - fixed));
-      return part_fixed + static_cast<std::size_t>(std::ceil(factor * static_cast<double>(target) *
-                                                             static_cast<double>(part_total - part_fixed) / free_total));
+      const double free_part = static_cast<double>(part_total - part_fixed);
+      const double want = std::ceil(factor * static_cast<double>(target) * free_part / free_total);
+      return want >= free_part ? part_total : part_fixed + static_cast<std::size_t>(want);
     };
     o.target_vertices = share(opt_.target_vertices, nl, part_band, nl_, band_vertices);
     o.target_faces = share(opt_.target_faces, nf, part_band_faces, nf_, band_faces);
@@ -1241,6 +1313,7 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
     A.scale_ = scale_;
     A.volume_ = volume_;
     A.alive_bias_ = nl_ - nl;
+    A.sync_ = &sync;
     A.init_state();
     A.init_faces();
     A.init_quadrics();
@@ -1330,7 +1403,7 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
       });
     }
   };
-  run_in_threads(build, whole);
+  run_in_threads(build, whole, static_cast<bool>(opt_.progress));
 
   // Node ids and stored rings, part after part.
   std::size_t collapses = 0, rings = 0, dead_faces = 0;
@@ -1352,11 +1425,18 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
   raw_.records.resize(collapses);
   raw_.ring_offsets.resize(collapses + 1);
   raw_.ring_items.resize(rings);
-  run_in_threads(merge, [] {});
+  run_in_threads(merge, [] {}, false);
   alive_vertices_ = nl_ - collapses;
   alive_faces_ = nf_ - dead_faces;
   init_faces();
   init_edges();
+  // The calls the parts' last (partial) steps owe: every kProgressStep collapses up to here, as a serial run
+  // makes them; the whole goes on from this count.
+  if (opt_.progress)
+    while (relayed + kProgressStep <= collapses) {
+      relayed += kProgressStep;
+      opt_.progress(relayed, nl_ - relayed);
+    }
 }
 
 VertexHierarchy Analysis::run(QemStats& stats) {
@@ -1536,7 +1616,10 @@ void Analysis::collapse_loop(QemStats& stats) {
       collapse(a, b, pl, step);
       ++stats.collapses;
       ++since_rebuild;
-      if (opt_.progress && (stats.collapses & 4095u) == 0) opt_.progress(stats.collapses, alive_vertices_);
+      if ((stats.collapses & (kProgressStep - 1)) == 0) {
+        if (opt_.progress) opt_.progress(stats.collapses, alive_vertices_);
+        if (sync_) report_to_caller();
+      }
     } else {
       switch (verdict) {
         case Verdict::kLink: ++stats.rejected_link; break;

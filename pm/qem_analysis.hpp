@@ -105,18 +105,25 @@ struct QemOptions {
   /// mesh goes on from there as a serial run does (qem_analysis.cpp, run_parts()). The hierarchy is valid
   /// and reproducible for a given value, but not the one a serial run gives (a different collapse order).
   /// Applies with CollapseCost::kQuadric and no colours, to meshes of at least min_part_faces faces per part
-  /// (fewer parts otherwise), and at most 256 parts; 1 (the default) is the serial analysis.
+  /// (fewer parts otherwise), and at most 256 parts; 1 (the default) is the serial analysis. What fails in a
+  /// part (std::bad_alloc) stops the others at their next 4096 collapses and is rethrown on the caller's
+  /// thread once all are joined; a thread that cannot be started gives std::system_error.
   std::size_t threads = 1;
   /// The fewest faces a part of a parallel analysis may have (>= 1; see threads). Smaller parts have a larger
   /// share of their vertices locked near the cuts.
   std::size_t min_part_faces = 16384;
-  /// Called every 4096 collapses with (collapses done, vertices left); may be empty. What it throws ends the
-  /// analysis and propagates.
+  /// Called every 4096 collapses with (collapses done, vertices left), on the caller's thread; may be empty.
+  /// With parts (threads), the same calls as a serial run making as many collapses: the parts report to the
+  /// caller's thread as they go, and the calls their last steps owe come when they are done. What it throws
+  /// ends the analysis (parts stop at their next 4096 collapses) and propagates.
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
 struct QemStats {
   std::size_t collapses = 0;
+  /// Pops refused by each check. rejected_locked counts the locked leaves' (NonManifoldPolicy::kLock) refusals
+  /// in the serial loop only: the parts of a parallel analysis also lock their cuts' bands, and their
+  /// refusals for locks are not counted (the other counts include the parts').
   std::size_t rejected_link = 0, rejected_flip = 0, rejected_depth = 0, rejected_locked = 0;
   std::size_t rejected_error = 0;  ///< pops whose error would exceed QemOptions::max_error
   std::size_t queue_rebuilds = 0;  ///< extra passes over all edges once the queue ran dry

@@ -7,8 +7,11 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <span>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -76,12 +79,17 @@ std::vector<Config> configs() {
   QemOptions parts3 = finish;
   parts3.threads = 3;
   parts3.min_part_faces = 24;
+  // As many parts as allowed (256), of one or two faces each: nearly every vertex is in a band.
+  QemOptions tiny;
+  tiny.threads = 100000;
+  tiny.min_part_faces = 1;
   return {{"quadric, volume kept", QemOptions{}},
           {"quadric, plain placement", plain},
           {"Lindstrom-Turk", with_cost(CollapseCost::kLindstromTurk)},
           {"quadric to 12 faces, Lindstrom-Turk finish", finish},
           {"quadric, 4 parts in parallel", parts4},
-          {"quadric to 12 faces, 3 parts in parallel", parts3}};
+          {"quadric to 12 faces, 3 parts in parallel", parts3},
+          {"quadric, 256 parts of one or two faces", tiny}};
 }
 
 TEST(QemAnalysis, EveryIntermediateMeshIsManifold) {
@@ -264,6 +272,90 @@ TEST(QemAnalysis, PartsKeepTheTargetsAndAreReproducible) {
   EXPECT_EQ(encode_vertex_hierarchy(build_vertex_hierarchy(m, o)), encode_vertex_hierarchy(build_vertex_hierarchy(m, serial)));
   o.min_part_faces = 0;
   EXPECT_THROW(build_vertex_hierarchy(m, o), InvalidInput);
+}
+
+// A target beyond the mesh leaves it as it is, with parts too. Each part's share of the target was converted
+// to a size_t from the share times 1.5 (QemOptions::threads), which does not fit for a target near SIZE_MAX:
+// the parts then simplified this torus to 492 faces under a target of SIZE_MAX faces.
+TEST(QemAnalysis, PartsLeaveTheMeshAsItIsUnderAHugeTarget) {
+  const TriMesh m = make_torus(64, 40);
+  for (int vertices = 0; vertices < 2; ++vertices)
+    for (std::size_t threads : {2u, 3u}) {
+      SCOPED_TRACE(std::to_string(threads) + (vertices ? " parts, vertex target" : " parts, face target"));
+      QemOptions o;
+      o.threads = threads;
+      o.min_part_faces = 512;
+      (vertices ? o.target_vertices : o.target_faces) = std::numeric_limits<std::size_t>::max();
+      QemStats st;
+      const VertexHierarchy h = build_vertex_hierarchy(m, o, &st);
+      EXPECT_EQ(st.collapses, 0u);
+      EXPECT_EQ(h.num_roots(), m.num_vertices());
+    }
+}
+
+// QemOptions::progress with parts: called on the caller's thread every 4096 collapses with (collapses, vertices
+// left), the calls a serial run makes for as many collapses (the parts report to that thread as they go), and
+// what it throws ends the analysis, in the parallel phase too. The parts made no call at all before: neither
+// a progress display nor a cancel reached them (the bunny in 2 parts: 0 calls for 34,819 collapses).
+TEST(QemAnalysis, PartsReportProgressOnTheCallersThread) {
+  const TriMesh m = make_torus(256, 160);  // 81,920 faces: 3 parts of about 13,000 collapses each
+  QemOptions o;
+  o.threads = 3;
+  o.min_part_faces = 4096;
+  std::vector<std::pair<std::size_t, std::size_t>> calls;
+  bool elsewhere = false;
+  const std::thread::id caller = std::this_thread::get_id();
+  o.progress = [&](std::size_t done, std::size_t left) {
+    elsewhere |= std::this_thread::get_id() != caller;
+    calls.emplace_back(done, left);
+  };
+  QemStats st;
+  const VertexHierarchy h = build_vertex_hierarchy(m, o, &st);
+  EXPECT_FALSE(elsewhere);
+  ASSERT_EQ(calls.size(), st.collapses / 4096);
+  for (std::size_t i = 0; i < calls.size(); ++i) {
+    EXPECT_EQ(calls[i].first, 4096 * (i + 1));
+    EXPECT_EQ(calls[i].second, h.num_leaves() - calls[i].first);
+  }
+  // Thrown at the first call (during the parts: each reports after 4096 of its collapses) or at the last one.
+  struct Cancelled {};
+  for (std::size_t at : {std::size_t{1}, calls.size()}) {
+    std::size_t n = 0;
+    o.progress = [&](std::size_t, std::size_t) {
+      if (++n == at) throw Cancelled{};
+    };
+    EXPECT_THROW(build_vertex_hierarchy(m, o), Cancelled);
+    EXPECT_EQ(n, at);
+  }
+}
+
+// Parts that leave everything to the whole (a target above what they hold): the whole starts from the leaf
+// state that they and the caller's thread computed (the seam vertices' quadrics, borders and bounds from
+// all their faces) and must then make the serial run's collapses, bit for bit. Two components, borders, and
+// locked leaves (a bow-tie under NonManifoldPolicy::kLock).
+TEST(QemAnalysis, IdlePartsGiveTheSerialHierarchy) {
+  TriMesh m = testing::concat(make_grid(30, 20), make_torus(32, 20), glm::vec3(0.5f, 0.5f, 2.0f));
+  const Index v = 5 * 31 + 7, p = static_cast<Index>(m.positions.size());  // an inner vertex of the grid
+  m.positions.push_back(m.positions[v] + glm::vec3(0.05f, 0.0f, 0.1f));
+  m.positions.push_back(m.positions[v] + glm::vec3(0.0f, 0.05f, 0.1f));
+  m.indices.insert(m.indices.end(), {v, p, p + 1});
+  for (int target = 0; target < 2; ++target) {
+    QemOptions serial;
+    serial.non_manifold = NonManifoldPolicy::kLock;
+    if (target == 0) serial.target_vertices = m.num_vertices() * 7 / 10;
+    else serial.target_faces = m.num_faces() * 7 / 10;
+    const std::vector<std::uint8_t> expected = encode_vertex_hierarchy(build_vertex_hierarchy(m, serial));
+    for (std::size_t threads : {2u, 4u, 7u}) {
+      SCOPED_TRACE(std::to_string(threads) + (target == 0 ? " parts, vertex target" : " parts, face target"));
+      QemOptions o = serial;
+      o.threads = threads;
+      o.min_part_faces = 64;
+      const VertexHierarchy h = build_vertex_hierarchy(m, o);
+      EXPECT_GT(h.repair_report().locked_vertices, 0u);
+      EXPECT_GT(h.num_collapses(), 300u);
+      EXPECT_TRUE(encode_vertex_hierarchy(h) == expected);
+    }
+  }
 }
 
 TEST(QemAnalysis, SphereApproximationIsClose) {
@@ -977,10 +1069,14 @@ TEST(QemAnalysis, DepthLeavesRoomForTheTreeIds) {
     m.positions.insert(m.positions.end(), {{float(t), 0, -5}, {float(t) + 0.5f, 0, -5}, {float(t), 0.5f, -5}});
     m.indices.insert(m.indices.end(), {b, b + 1, b + 2});
   }
-  for (const CollapseCost cost : {CollapseCost::kLindstromTurk, CollapseCost::kQuadric}) {
+  // With parts (QemOptions::threads), each counts the other parts' vertices among the roots.
+  for (const auto& [cost, threads] : {std::pair{CollapseCost::kLindstromTurk, 1}, std::pair{CollapseCost::kQuadric, 1},
+                                      std::pair{CollapseCost::kQuadric, 3}, std::pair{CollapseCost::kQuadric, 40}}) {
     QemOptions o;
     o.max_depth = 62;
     o.cost = cost;
+    o.threads = static_cast<std::size_t>(threads);
+    o.min_part_faces = 1;
     VertexHierarchy h;
     ASSERT_NO_THROW(h = build_vertex_hierarchy(m, o));
     h.validate();
