@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <exception>
 #include <limits>
 #include <memory>
@@ -323,6 +324,7 @@ class Analysis {
   void init_raw();          // the raw hierarchy's leaves (positions, colours; bounds sized)
   void init_leaf_bounds();  // after init_edges(): reads the edge runs
   void collapse_loop(QemStats& stats);
+  void check_finite() const;  // before finish(): the nodes' positions and bounds are finite floats
   // Parallel analysis (QemOptions::threads): the number of parts to use (1: serial), and the run of them.
   std::size_t parallel_parts() const;
   void run_parts(std::size_t parts, QemStats& stats);
@@ -1472,6 +1474,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   raw_.repair = in_.report;
   stats.base_vertices = alive_vertices_;
   stats.base_faces = alive_faces_;
+  check_finite();
 #ifdef NDEBUG
   constexpr bool kValidate = false;
 #else
@@ -1480,6 +1483,31 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   VertexHierarchy h = VertexHierarchyBuilder::finish(std::move(raw_), kValidate, /*trusted=*/true);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return h;
+}
+
+// finish() trusts the analysis's arrays and skips the checks a file's reader makes, but one of them the
+// analysis does not ensure by construction: that its results fit in float. Near the float limit (coordinates
+// of 1e38 and more) a placement, a sphere or an accumulated error overflows to infinity; the hierarchy would
+// pass validate(), and its file would be refused when read. Refused here instead, naming the node.
+void Analysis::check_finite() const {
+  auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  for (std::size_t v = 0; v < raw_.positions.size(); ++v) {
+    const ElementBound& b = raw_.bounds[v];
+    const char* what = !finite(raw_.positions[v])                              ? "position"
+                       : !finite(b.center) || !std::isfinite(b.radius)         ? "bounding sphere"
+                       : !std::isfinite(b.error)                               ? "error"
+                       : !finite(b.cone.axis) || !std::isfinite(b.cone.cos_half_angle) ? "normal cone"
+                                                                                : nullptr;
+    if (what == nullptr) continue;
+    float largest = 0.0f;
+    for (std::size_t l = 0; l < nl_; ++l)
+      for (int k = 0; k < 3; ++k) largest = std::max(largest, std::abs(raw_.positions[l][k]));
+    char reach[32];
+    std::snprintf(reach, sizeof reach, "%g", static_cast<double>(largest));
+    const std::string node = v < nl_ ? "leaf " + std::to_string(v) : "node " + std::to_string(v) + " (collapse " + std::to_string(v - nl_) + ")";
+    throw InvalidInput("QEM analysis: the " + std::string(what) + " of " + node + " overflows float: the mesh's coordinates reach " +
+                       reach + ", too near the largest float (3.4e+38) for the hierarchy's positions and bounds; scale it down");
+  }
 }
 
 void Analysis::init_state() {

@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
@@ -1042,16 +1043,51 @@ TEST(QemAnalysis, HugeModelsAreSimplifiedLikeSmallOnes) {
 
 // And tiny ones: coordinates near 1e-40 are subnormal floats, a leaf's radius rounded down to float missed its
 // farthest corner by more than the loader's relative slack, and pm build refused its own output (helper-54).
+// The reader checks every leaf's sphere (finish() no longer does for the analysis's own arrays).
 TEST(QemAnalysis, TinyModelsBuildAndLoad) {
   const TriMesh unit = testing::make_icosphere(3);
-  for (const float scale : {1e-30f, 1e-38f, 1e-40f, 1e-42f, 1e-44f}) {
-    TriMesh m = unit;
-    for (glm::vec3& p : m.positions) p *= scale;
-    QemStats st;
-    const VertexHierarchy h = build_vertex_hierarchy(m, {}, &st);  // finish() checks every leaf's sphere
-    h.validate();
-    EXPECT_EQ(h.num_leaves(), m.num_vertices()) << "scale " << scale;
-  }
+  for (const float scale : {1e-30f, 1e-38f, 1e-40f, 1e-42f, 1e-44f})
+    for (std::size_t threads : {1u, 3u}) {
+      TriMesh m = unit;
+      for (glm::vec3& p : m.positions) p *= scale;
+      QemOptions o;
+      o.threads = threads;
+      o.min_part_faces = 64;
+      const VertexHierarchy h = build_vertex_hierarchy(m, o);
+      h.validate();
+      EXPECT_EQ(h.num_leaves(), m.num_vertices()) << "scale " << scale;
+      EXPECT_NO_THROW(decode_vertex_hierarchy(encode_vertex_hierarchy(h), "tiny")) << "scale " << scale << ", " << threads << " threads";
+    }
+}
+
+// Near the largest float, results overflow: a placement, a sphere, an accumulated error. Since finish() trusts
+// the analysis (it skips the reader's checks), such a hierarchy passed validate() and was written, and the
+// reader refused the file ("non-finite value in the position of node 318" for a sphere at 2e38). The analysis
+// refuses the mesh instead, naming the node; what it builds reads back.
+TEST(QemAnalysis, ModelsNearTheFloatLimitAreRefusedOrLoad) {
+  std::size_t built = 0, refused = 0;
+  for (const float scale : {1e37f, 1e38f, 2e38f, 3.4e38f})
+    for (int shape = 0; shape < 2; ++shape)
+      for (std::size_t threads : {1u, 3u}) {
+        SCOPED_TRACE(std::to_string(scale) + (shape == 0 ? " sphere, " : " grid, ") + std::to_string(threads) + " threads");
+        TriMesh m = shape == 0 ? make_icosphere(2) : make_grid(10, 8, 0.5f);
+        glm::vec3 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
+        for (const glm::vec3& p : m.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+        for (glm::vec3& p : m.positions) p = ((p - lo) / (hi - lo) * 2.0f - 1.0f) * scale;  // [-scale, scale]^3
+        QemOptions o;
+        o.threads = threads;
+        o.min_part_faces = 32;
+        try {
+          const VertexHierarchy h = build_vertex_hierarchy(m, o);
+          ++built;
+          EXPECT_NO_THROW(decode_vertex_hierarchy(encode_vertex_hierarchy(h), "huge"));
+        } catch (const InvalidInput& e) {
+          ++refused;
+          EXPECT_NE(std::string(e.what()).find("overflows float"), std::string::npos) << e.what();
+        }
+      }
+  EXPECT_GT(built, 0u);    // 1e37
+  EXPECT_GT(refused, 0u);  // 2e38 and more
 }
 
 // The depth limit ignored the bits the tree ids need: with max_depth 62 a chain of collapses and a few
