@@ -1459,6 +1459,37 @@ TEST(SrMesh, RealMeshesKimLeeWalks) {
   }
 }
 
+// Parallel hierarchies of the same meshes (QemOptions::threads; parts of 256 faces or more, so that the cuts
+// cross the cow's split pinch and the dragon's repaired pieces, and some pieces lie whole in one part):
+// refining everything gives the input under every scheme, and Kim-Lee walks agree with the dual-piece oracle.
+TEST(SrMesh, RealMeshesParallelHierarchiesWalk) {
+  VARMESH_REQUIRE_REAL_MESHES(paths);
+  std::uint32_t seed = 71;
+  for (const std::string& path : paths) {
+    SCOPED_TRACE(path);
+    const TriMesh m = read_mesh(path);
+    QemOptions opt;
+    opt.threads = 5;
+    opt.min_part_faces = 256;
+    const VertexHierarchy h = build_vertex_hierarchy(m, opt);
+    h.validate();
+    for (RefinementScheme s : kSchemes) {
+      SrMesh all(h, s);
+      all.refine_all();
+      EXPECT_TRUE(same_as_original(all)) << scheme_name(s);
+      EXPECT_EQ(differs_from_input(all, m), "") << scheme_name(s);
+    }
+    SrMesh sr(h);
+    WalkOptions o;
+    o.ops = 30000, o.seed = seed++, o.full_every = 10 * kSparse, o.oracle_every = 50 * kSparse, o.validate_every = 250 * kSparse;
+    const WalkResult r = checked_walk(sr, o);
+    ASSERT_TRUE(r.ok);
+    EXPECT_GT(r.selective_splits, 8000u);
+    EXPECT_GT(r.selective_collapses, 8000u);
+    EXPECT_EQ(sr.stats().degenerate_cases, sr.stats().presplits + sr.stats().postponed_ecols);
+  }
+}
+
 // The baselines on the same meshes: their rules at every split and ecol, forced operations counted.
 TEST(SrMesh, RealMeshesBaselineWalks) {
   VARMESH_REQUIRE_REAL_MESHES(paths);
