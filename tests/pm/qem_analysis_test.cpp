@@ -830,6 +830,26 @@ TEST(QemAnalysis, LindstromTurkFinishNeedsAFaceOrVertexTarget) {
   }
 }
 
+// RMS distance from every fourth used vertex of m to h's base mesh, by brute force against every base face.
+double rms_to_base(const TriMesh& m, const VertexHierarchy& h) {
+  const TriMesh base = mesh_after_collapses(h, h.num_collapses());
+  double sum = 0.0;
+  std::size_t n = 0;
+  std::vector<std::uint8_t> used(m.num_vertices(), 0);
+  for (Index v : m.indices) used[v] = 1;
+  for (std::size_t v = 0; v < m.num_vertices(); v += 4) {
+    if (!used[v]) continue;
+    double best = HUGE_VAL;
+    for (std::size_t f = 0; f < base.num_faces(); ++f)
+      best = std::min(best, testing::point_triangle(glm::dvec3(m.positions[v]), glm::dvec3(base.positions[base.indices[3 * f]]),
+                                                    glm::dvec3(base.positions[base.indices[3 * f + 1]]),
+                                                    glm::dvec3(base.positions[base.indices[3 * f + 2]])));
+    sum += best * best;
+    ++n;
+  }
+  return std::sqrt(sum / static_cast<double>(n));
+}
+
 // What the finish is for: at 1 % of the bunny's faces the last collapses, chosen on the current surface,
 // bring the RMS distance from the original vertices to the base mesh well below the quadric run's
 // (BENCHMARKS.md: 17.2e-4 -> 13.3e-4 of the diagonal, level with CGAL's Lindstrom-Turk). Every fourth
@@ -841,23 +861,7 @@ TEST(QemAnalysis, LindstromTurkFinishLowersTheBunnysError) {
     QemOptions o;
     o.target_faces = m.num_faces() / 100;
     o.lt_finish = lt_finish;
-    const VertexHierarchy h = build_vertex_hierarchy(m, o);
-    const TriMesh base = mesh_after_collapses(h, h.num_collapses());
-    double sum = 0.0;
-    std::size_t n = 0;
-    std::vector<std::uint8_t> used(m.num_vertices(), 0);
-    for (Index v : m.indices) used[v] = 1;
-    for (std::size_t v = 0; v < m.num_vertices(); v += 4) {
-      if (!used[v]) continue;
-      double best = HUGE_VAL;
-      for (std::size_t f = 0; f < base.num_faces(); ++f)
-        best = std::min(best, testing::point_triangle(glm::dvec3(m.positions[v]), glm::dvec3(base.positions[base.indices[3 * f]]),
-                                                      glm::dvec3(base.positions[base.indices[3 * f + 1]]),
-                                                      glm::dvec3(base.positions[base.indices[3 * f + 2]])));
-      sum += best * best;
-      ++n;
-    }
-    return std::sqrt(sum / static_cast<double>(n));
+    return rms_to_base(m, build_vertex_hierarchy(m, o));
   };
   const double quadric = rms(0.0), finished = rms(4.0);
   EXPECT_LT(finished, 0.9 * quadric) << "RMS with the finish " << finished << ", quadrics to the end " << quadric;
@@ -868,21 +872,7 @@ TEST(QemAnalysis, LindstromTurkFinishLowersTheBunnysError) {
 TEST(QemAnalysis, PartsSimplifyTheBunnyAsWellAsASerialRun) {
   VARMESH_REQUIRE_SHARED(path, "meshes/bun_zipper_35947v.obj");
   const TriMesh m = read_mesh(path);
-  auto rms = [&](const VertexHierarchy& h) {
-    const TriMesh base = mesh_after_collapses(h, h.num_collapses());
-    double sum = 0.0;
-    std::size_t n = 0;
-    for (std::size_t v = 0; v < m.num_vertices(); v += 4) {
-      double best = HUGE_VAL;
-      for (std::size_t f = 0; f < base.num_faces(); ++f)
-        best = std::min(best, testing::point_triangle(glm::dvec3(m.positions[v]), glm::dvec3(base.positions[base.indices[3 * f]]),
-                                                      glm::dvec3(base.positions[base.indices[3 * f + 1]]),
-                                                      glm::dvec3(base.positions[base.indices[3 * f + 2]])));
-      sum += best * best;
-      ++n;
-    }
-    return std::sqrt(sum / static_cast<double>(n));
-  };
+  auto rms = [&](const VertexHierarchy& h) { return rms_to_base(m, h); };
   QemOptions o;
   o.target_faces = m.num_faces() / 100;
   const VertexHierarchy serial = build_vertex_hierarchy(m, o);
