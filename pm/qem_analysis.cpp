@@ -943,7 +943,10 @@ void Analysis::init_edges() {
         const Index w = cur_[3 * *it + k];
         if (w > v && mark_[w] != stamp_) {
           mark_[w] = stamp_;
-          edges_.push_back({static_cast<Index>(v), w, 0.0, glm::dvec3(0.0)});
+          // Ends in node order (Edge): slots and nodes agree on a fresh mesh, not after a parallel
+          // analysis's parts, whose nodes the whole's slots hold.
+          const Index u = static_cast<Index>(v);
+          edges_.push_back(node_of_[u] < node_of_[w] ? Edge{u, w, 0.0, glm::dvec3(0.0)} : Edge{w, u, 0.0, glm::dvec3(0.0)});
           ++eadj_[v].cnt;
           ++eadj_[w].cnt;
         }

@@ -105,7 +105,10 @@ void check_untrusted(const VertexHierarchyBuilder::Raw& raw) {
     const glm::vec3& p = raw.positions[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) bad("node " + std::to_string(v) + ": position not finite");
     const ElementBound& b = raw.bounds[v];
-    if (!(b.radius >= 0.0f) || !std::isfinite(b.radius) || !(b.error >= 0.0f) || !std::isfinite(b.error))
+    if (!(b.radius >= 0.0f) || !std::isfinite(b.radius) || !(b.error >= 0.0f) || !std::isfinite(b.error) ||
+        !std::isfinite(b.center.x) || !std::isfinite(b.center.y) || !std::isfinite(b.center.z) ||
+        !std::isfinite(b.cone.axis.x) || !std::isfinite(b.cone.axis.y) || !std::isfinite(b.cone.axis.z) ||
+        !std::isfinite(b.cone.cos_half_angle))
       bad("node " + std::to_string(v) + ": bound not finite or negative");
     if (outside(p, b)) bad("node " + std::to_string(v) + ": position outside its bounding sphere");
   }
@@ -292,6 +295,17 @@ bool cone_inside(const NormalCone& c, const NormalCone& p) noexcept {
 void VertexHierarchy::validate() const {
   auto fail = [](const std::string& what) { throw std::logic_error("VertexHierarchy::validate: " + what); };
   const std::size_t nn = num_nodes();
+  // Finite values first: every comparison below is false on a NaN, so a NaN error or sphere would pass them.
+  auto finite3 = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  for (std::size_t v = 0; v < nn; ++v) {
+    const ElementBound& b = bounds_[v];
+    const char* what = !finite3(positions_[v])                                                ? "position not finite"
+                       : !finite3(b.center) || !(b.radius >= 0.0f) || !std::isfinite(b.radius) ? "bounding sphere not finite or negative"
+                       : !(b.error >= 0.0f) || !std::isfinite(b.error)                         ? "error not finite or negative"
+                       : !finite3(b.cone.axis) || !std::isfinite(b.cone.cos_half_angle)        ? "normal cone not finite"
+                                                                                              : nullptr;
+    if (what != nullptr) fail("node " + std::to_string(v) + ": " + what);
+  }
   // The children and faces of successive records are scattered over the arrays: read them a few records
   // ahead (the faces' corners one step later than the faces) so that the misses overlap. Plain loads, not
   // __builtin_prefetch: a prefetch that misses the TLB may be dropped (on the machine measured, a VM, the

@@ -16,7 +16,7 @@
 /// hierarchy. Per node: position (and colour), a bounding sphere and normal cone of its region, an error
 /// (object units), and the 64-bit <tree-id, node-id> key of section 4.3.
 ///
-/// Invariants (validate()): parent/children consistent, children created before parents, keys consistent
+/// Invariants (validate()): finite positions and bounds (radius and error >= 0), parent/children consistent, children created before parents, keys consistent
 /// with the tree shape, bounds nested (child sphere inside parent sphere up to rounding, child error <=
 /// parent error, child cone inside parent cone up to 2e-3 radians), faces' corners are leaves, fl^/fr^
 /// contain vl^/vr^ and one descendant of each child; and the topology, by replaying the collapses on the

@@ -705,7 +705,7 @@ VertexHierarchy full_hierarchy(const TriMesh& m) {
 // A hierarchy from a mesh and collapses (vt, vu) named by node id, collapse i creating node
 // num_vertices + i at the midpoint. The records (fl^, fr^, vl^, vr^, fn0..fn3, stored rings) are worked out
 // by replaying the collapses on the faces; VertexHierarchyBuilder::finish() checks them as it checks a file's.
-VertexHierarchy hierarchy_from_collapses(const TriMesh& m, const std::vector<std::pair<Index, Index>>& collapses) {
+VertexHierarchyBuilder::Raw raw_from_collapses(const TriMesh& m, const std::vector<std::pair<Index, Index>>& collapses) {
   VertexHierarchyBuilder::Raw raw;
   const Index n = static_cast<Index>(m.num_vertices());
   const std::size_t nf = m.num_faces();
@@ -771,7 +771,42 @@ VertexHierarchy hierarchy_from_collapses(const TriMesh& m, const std::vector<std
   for (Index v = 0; v < n; ++v) raw.leaf_to_input.push_back(v);
   for (std::size_t f = 0; f < nf; ++f) raw.face_to_input.push_back(static_cast<Index>(f));
   raw.repair.input_vertices = n, raw.repair.input_faces = nf;
-  return VertexHierarchyBuilder::finish(std::move(raw));
+  return raw;
+}
+
+VertexHierarchy hierarchy_from_collapses(const TriMesh& m, const std::vector<std::pair<Index, Index>>& collapses) {
+  return VertexHierarchyBuilder::finish(raw_from_collapses(m, collapses));
+}
+
+// validate() compares bounds (child error <= parent error, spheres nested), and every comparison with a NaN
+// is false: it checks that the values are finite first. finish(raw, validate, trusted) skips the reader's
+// own checks (as the analysis does), so validate() is what stands between a NaN and a built hierarchy.
+TEST(SrMesh, ValidateRefusesNonFiniteNodeValues) {
+  const TriMesh m = make_icosphere(0);
+  const auto raw = raw_from_collapses(m, {{m.corner(0, 0), m.corner(0, 1)}});
+  const Index node = static_cast<Index>(m.num_vertices());  // the collapse's node
+  EXPECT_NO_THROW(VertexHierarchyBuilder::finish(raw, /*validate=*/true, /*trusted=*/true));
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const std::vector<std::pair<std::function<void(VertexHierarchyBuilder::Raw&)>, std::string>> edits = {
+      {[&](auto& r) { r.positions[node].y = nan; }, "position not finite"},
+      {[&](auto& r) { r.bounds[node].error = nan; }, "error not finite"},
+      {[&](auto& r) { r.bounds[2].error = inf; }, "error not finite"},
+      {[&](auto& r) { r.bounds[node].radius = nan; }, "bounding sphere not finite"},
+      {[&](auto& r) { r.bounds[1].center.x = inf; }, "bounding sphere not finite"},
+      {[&](auto& r) { r.bounds[node].cone.cos_half_angle = nan; }, "normal cone not finite"},
+  };
+  for (const auto& [edit, expected] : edits) {
+    VertexHierarchyBuilder::Raw bad = raw;
+    edit(bad);
+    try {
+      VertexHierarchyBuilder::finish(bad, /*validate=*/true, /*trusted=*/true);
+      ADD_FAILURE() << "accepted; expected: " << expected;
+    } catch (const std::logic_error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+    // Untrusted (a file's reader): refused before validate() as invalid input.
+    EXPECT_THROW(VertexHierarchyBuilder::finish(bad), InvalidInput) << expected;
+  }
 }
 
 TEST(SrMesh, StartsAtBaseAndMatchesOracle) {
