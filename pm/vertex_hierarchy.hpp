@@ -16,21 +16,21 @@
 /// hierarchy. Per node: position (and colour), a bounding sphere and normal cone of its region, an error
 /// (object units), and the 64-bit <tree-id, node-id> key of section 4.3.
 ///
-/// Invariants (validate()): finite positions and bounds (radius and error >= 0), parent/children consistent, children created before parents, keys consistent
-/// with the tree shape, bounds nested (child sphere inside parent sphere up to rounding, child error <=
-/// parent error, child cone inside parent cone up to 2e-3 radians), faces' corners are leaves, fl^/fr^
-/// contain vl^/vr^ and one descendant of each child; and the topology, by replaying the collapses on the
-/// original faces (check_collapses()): the original mesh is an oriented 2-manifold with border (no repeated
-/// corner, each directed edge once, each vertex one fan, no two faces on the same corners), and each record,
-/// in node order, is a legal full-edge collapse of its current mesh as the analysis makes them: vt and vu
-/// share exactly the faces fl^ (holding vt -> vu) and fr^ (vu -> vt), whose third corners are
-/// the ancestors of vl^ and vr^; the link condition holds (their only common neighbours are those corners,
-/// an interior edge does not join two border vertices, an apex keeps a face, no tetrahedron); fn0..fn3 are
-/// the faces across (vu, vl), (vl, vt), (vt, vr), (vr, vu); the stored ring is the set of vs's neighbours
-/// afterwards; and the faces left at the end are the base mesh. Then each leaf's cone holds its faces'
-/// normals (up to 1e-4 in the cosine), locked leaves are never collapsed, and no two faces come from one
-/// input face. Up to geometry, a hierarchy that passes is one the analysis could have built, which is what
-/// SrMesh's three schemes rely on.
+/// Invariants (validate()): finite positions and bounds (radius and error >= 0), parent/children consistent,
+/// children created before parents, keys consistent with the tree shape, bounds nested (child sphere inside
+/// parent sphere up to rounding, child error <= parent error, child cone inside parent cone up to 2e-3
+/// radians), faces' corners are leaves, fl^/fr^ contain vl^/vr^ and one descendant of each child; and the
+/// topology, by replaying the collapses on the original faces (check_collapses()): the original mesh is an
+/// oriented 2-manifold with border (no repeated corner, each directed edge once, each vertex one fan, no two
+/// faces on the same corners), and each record, in node order, is a legal full-edge collapse of its current
+/// mesh as the analysis makes them: vt and vu share exactly the faces fl^ (holding vt -> vu) and fr^ (vu ->
+/// vt), whose third corners are the ancestors of vl^ and vr^; the link condition holds (their only common
+/// neighbours are those corners, an interior edge does not join two border vertices, an apex keeps a face, no
+/// tetrahedron); fn0..fn3 are the faces across (vu, vl), (vl, vt), (vt, vr), (vr, vu); the stored ring is the
+/// set of vs's neighbours afterwards; and the faces left at the end are the base mesh. Then each leaf's cone
+/// holds its faces' normals (up to 1e-4 in the cosine), locked leaves are never collapsed, and no two faces
+/// come from one input face. Up to geometry, a hierarchy that passes is one the analysis could have built,
+/// which is what SrMesh's three schemes rely on.
 #include <array>
 #include <bit>
 #include <cstddef>
