@@ -310,12 +310,25 @@ class Analysis {
     std::array<Index, 4> fn{kInvalid, kInvalid, kInvalid, kInvalid};
     double local = 0.0;  // largest distance from vs to the current planes of the faces around a and b, and
                          // between the border polylines through a, b and through vs (border_deviation)
+    double fine = 0.0;   // largest distance from a leaf end to its fan with the neighbours refined (check())
   };
+  // The node error a collapse records: the moves accumulate (each is measured from the surface the earlier
+  // collapses left), the fine-fan distance does not (it is measured from an input vertex).
+  double step_error(Index a, Index b, const Step& st) const {
+    return std::max(std::max(uerr_[a], uerr_[b]) + st.local, st.fine);
+  }
+  // The slot whose node holds the leaf of slot x now (union-find over the slots: a collapse (a, b) links b
+  // to a), with path halving.
+  Index slot_of(Index x) {
+    while (uf_[x] != x) x = uf_[x] = uf_[uf_[x]];
+    return x;
+  }
   Verdict check(Index a, Index b, const glm::dvec3& p, Step& st);
   double border_deviation(Index a, Index b, const glm::dvec3& p) const;
   void collapse(Index a, Index b, const Placement& pl, const Step& st);
   void init_state();  // the per-slot and per-face arrays for nl_ slots and nf_ faces, all alive
   void init_faces();  // the runs of the live faces and their normals
+  void init_leaf_faces();  // ofadj_, ofpool_: each leaf's input faces
   void init_quadrics();
   // The border test and, on a border vertex, its quadric summed again with the border planes, from v's faces
   // in face order (count of them at `faces`); the scratch buffers hold at least `count` entries.
@@ -377,6 +390,10 @@ class Analysis {
   std::vector<glm::dvec3> new_normal_;  // scratch of check() for collapse()
   std::vector<Index> new_fan_;          // scratch of check(): the faces of a and b that stay
   std::vector<std::uint8_t> stale_;     // per edge, Lindstrom-Turk only: costed before its neighbourhood changed
+  std::vector<Index> uf_;               // per slot: the slot its node was collapsed into (itself while alive)
+  std::vector<std::uint8_t> near_node_; // per slot: some neighbour was made by a collapse (a filter for check())
+  std::vector<Run> ofadj_;              // per leaf: its input faces (dead ones included)
+  std::vector<Index> ofpool_;
 
   VertexHierarchyBuilder::Raw raw_;
   std::vector<double> uerr_;  // per node, unit coordinates (per slot too)
@@ -680,6 +697,35 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
     if (std::isfinite(best)) st.local = std::max(st.local, std::sqrt(best));
   }
   if (border_[a] || border_[b]) st.local = std::max(st.local, border_deviation(a, b, p));
+  // A leaf end measured against the fan it lands in with its neighbours refined back to input vertices: its
+  // input faces with every corner now under a or b moved to vs. The fan above joins vs to the current
+  // neighbours, which may be far coarser than the ones a view-dependent front puts next to vs (a node made
+  // late, among neighbours of 5-10x its error, then active beside their leaves: the elephant and the shark
+  // measured up to 1.9x E at such leaves). When every neighbour but a and b is still a leaf, the two fans
+  // agree around the leaf and the measure above holds. Input vertex to surface: not accumulated
+  // (step_error()).
+  for (Index v : {a, b}) {
+    if (node_of_[v] >= nl_ || !near_node_[v]) continue;
+    bool coarse = false;
+    for (const EdgeRef* e = edges_begin(v); e != edges_end(v) && !coarse; ++e)
+      coarse = e->to != a && e->to != b && node_of_[e->to] >= nl_;
+    if (!coarse) continue;
+    const double bar = step_error(a, b, st);
+    const glm::dvec3 x = geo_[v].p;
+    double best = std::numeric_limits<double>::infinity();
+    for (Index i = ofadj_[v].off, end = i + ofadj_[v].cnt; i < end; ++i) {
+      const Index f = ofpool_[i];
+      glm::dvec3 q[3];
+      for (int k = 0; k < 3; ++k) {
+        // A live face names its corners' slots; a dead one's are found through the union-find.
+        const Index leaf = in_.faces[3 * f + k], s = alive_[f] ? cur_[3 * f + k] : slot_of(leaf);
+        q[k] = s == a || s == b ? p : to_unit(in_.positions[leaf]);
+      }
+      best = std::min(best, point_triangle_distance_sq(x, q[0], q[1], q[2]));
+      if (best <= bar * bar) break;
+    }
+    if (std::isfinite(best)) st.fine = std::max(st.fine, std::sqrt(best));
+  }
   return Verdict::kOk;
 }
 
@@ -747,7 +793,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   }
   rec.fn = st.fn;
   // Error: accumulated largest distance from vs to the planes of the faces it replaces.
-  const double err = std::max(uerr_[a], uerr_[b]) + st.local;
+  const double err = step_error(a, b, st);
 
   // The new node, in a's slot (mark_[a] holds an old stamp: no reset needed).
   node_of_[vs] = static_cast<Index>(raw_.positions.size());
@@ -759,6 +805,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     geo_[vs].q += geo_[b].q;
   }
   node_alive_[b] = 0;
+  uf_[b] = a;
   border_[vs] |= border_[b];
   rejected_[vs] = 0;
   height_[vs] = static_cast<std::uint16_t>(std::max(height_[a], height_[b]) + 1);
@@ -806,6 +853,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       if (w == vs || mark_[w] == stamp_) continue;
       mark_[w] = stamp_;
       link_[w] = kInvalid;
+      near_node_[w] = 1;
       ring_.push_back(w);
       raw_.ring_items.push_back(node_of_[w]);
     }
@@ -925,6 +973,18 @@ void Analysis::init_faces() {
     const double len = glm::length(n);
     fnormal_[f] = len > 0.0 ? n / len : glm::dvec3(0.0);
     if (lt_) set_plane(static_cast<Index>(f), n);
+  }
+}
+
+void Analysis::init_leaf_faces() {
+  ofadj_.assign(nl_, Run{});
+  for (std::size_t i = 0; i < 3 * nf_; ++i) ++ofadj_[in_.faces[i]].cnt;
+  Index off = 0;
+  for (Run& r : ofadj_) r.off = off, off += r.cnt, r.cnt = 0;
+  ofpool_.resize(3 * nf_);
+  for (std::size_t i = 0; i < 3 * nf_; ++i) {
+    Run& r = ofadj_[in_.faces[i]];
+    ofpool_[r.off + r.cnt++] = static_cast<Index>(i / 3);
   }
 }
 
@@ -1321,6 +1381,7 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
     A.sync_ = &sync;
     A.init_state();
     A.init_faces();
+    A.init_leaf_faces();
     A.init_quadrics();
     A.init_edges();
     A.init_raw();
@@ -1338,10 +1399,14 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
       const Index g = P.l2g[l];
       if (owner[g] == kSeam) continue;
       node_of_[g] = node(A.node_of_[l]);
+      Index root = static_cast<Index>(l);
+      while (A.uf_[root] != root) root = A.uf_[root];
+      uf_[g] = P.l2g[root];
       geo_[g] = A.geo_[l];
       uerr_[g] = A.uerr_[l];
       height_[g] = A.height_[l];
       border_[g] = A.border_[l];
+      near_node_[g] = A.near_node_[l];
       node_alive_[g] = A.node_alive_[l];
       raw_.bounds[g] = A.raw_.bounds[l];
     }
@@ -1431,9 +1496,13 @@ void Analysis::run_parts(std::size_t k, QemStats& stats) {
   raw_.ring_offsets.resize(collapses + 1);
   raw_.ring_items.resize(rings);
   run_in_threads(merge, [] {}, false);
+  // The seam's vertices may have neighbours that the parts collapsed.
+  for (Index v = 0; v < nl_; ++v)
+    if (owner[v] == kSeam) near_node_[v] = 1;
   alive_vertices_ = nl_ - collapses;
   alive_faces_ = nf_ - dead_faces;
   init_faces();
+  init_leaf_faces();
   init_edges();
   // The calls the parts' last (partial) steps owe: every kProgressStep collapses up to here, as a serial run
   // makes them; the whole goes on from this count.
@@ -1463,6 +1532,7 @@ VertexHierarchy Analysis::run(QemStats& stats) {
   } else {
     init_state();
     init_faces();
+    init_leaf_faces();
     init_quadrics();
     init_edges();
     init_raw();
@@ -1530,6 +1600,9 @@ void Analysis::init_state() {
   uerr_.assign(nl_, 0.0);
   mark_.assign(nl_, 0);
   link_.assign(nl_, kInvalid);
+  uf_.resize(nl_);
+  std::iota(uf_.begin(), uf_.end(), Index{0});
+  near_node_.assign(nl_, 0);
 
   // Quadrics: area-weighted face planes plus border constraints (GH97).
   if (colors_) {
@@ -1618,7 +1691,7 @@ void Analysis::collapse_loop(QemStats& stats) {
       }
     }
     auto too_far = [&] {
-      return std::isfinite(opt_.max_error) && (std::max(uerr_[a], uerr_[b]) + step.local) * scale_ > opt_.max_error;
+      return std::isfinite(opt_.max_error) && step_error(a, b, step) * scale_ > opt_.max_error;
     };
     // The queue orders by the quadric's own minimum (a lower bound of the cost at the constrained point);
     // the constraint reads the current faces around a and b, so it is applied here, once per pop. Where the

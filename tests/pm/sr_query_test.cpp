@@ -4,6 +4,7 @@
 #include <functional>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -139,6 +140,63 @@ TEST(SrQuery, ObjectErrorBoundsTheDistanceOnClosedSurfaces) {
                                         << shape.seed << ", error " << k << " x diagonal: " << sr.num_faces()
                                         << " faces, max distance " << d.max / (k * diag) << " x the error";
     }
+  }
+}
+
+// Max distance from the input's vertices to object_error(k x diagonal)'s extraction over k x diagonal, the
+// worst over k = 0.05 % to 2 %; the face count of the worst goes to `faces`.
+double worst_error_ratio(const TriMesh& m, const VertexHierarchy& h, std::size_t& faces) {
+  const double diag = double(m.bounds().diagonal());
+  double worst = 0.0;
+  for (double k : {0.0005, 0.001, 0.002, 0.005, 0.01, 0.02}) {
+    SrMesh sr(h, RefinementScheme::kKimLee);
+    Query q;
+    q.criterion = Criterion::object_error(static_cast<float>(k * diag));
+    extract(sr, q);
+    const double r = vertex_to_surface_distance(m, sr.to_mesh()).max / (k * diag);
+    if (r >= worst) worst = r, faces = sr.num_faces();
+  }
+  return worst;
+}
+
+// A view-dependent front puts a node next to the refined children of neighbours that were coarse when it was
+// made; the node error measured its leaves only against the fan of those coarse neighbours, and bumpy
+// icospheres with holes measured 1.3-2.0x E at such leaves (seeds 1, 2, 4, 5, 6 below), the elephant and
+// the shark of the data folder 1.9x and 1.4x. Now at most 1.17x (the estimate is a heuristic: 1.25x).
+TEST(SrQuery, ObjectErrorBoundsTheDistanceBesideRefinedNeighbours) {
+  for (unsigned seed : {1u, 2u, 4u, 5u, 6u}) {
+    TriMesh m = testing::make_icosphere(4);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> radius(0.7f, 1.3f);
+    for (glm::vec3& p : m.positions) p *= radius(rng);
+    // Three holes, cut by the directions of the face centres.
+    std::vector<Index> kept;
+    for (std::size_t f = 0; f < m.num_faces(); ++f) {
+      glm::vec3 c(0.0f);
+      for (int k = 0; k < 3; ++k) c += glm::normalize(m.positions[m.indices[3 * f + k]]) / 3.0f;
+      if (c.z > 0.8f || c.x > 0.85f || c.y < -0.9f) continue;
+      kept.insert(kept.end(), m.indices.begin() + 3 * std::ptrdiff_t(f), m.indices.begin() + 3 * std::ptrdiff_t(f) + 3);
+    }
+    ASSERT_LT(kept.size(), m.indices.size());
+    m.indices = std::move(kept);
+    const VertexHierarchy h = build_vertex_hierarchy(m);
+    ASSERT_GT(h.num_collapses(), m.positions.size() / 2);
+    std::size_t faces = 0;
+    const double worst = worst_error_ratio(m, h, faces);
+    EXPECT_LE(worst, 1.25) << "seed " << seed << ": " << faces << " faces";
+  }
+}
+
+// The same on the meshes of the data folder, with holes and closed.
+TEST(SrQuery, ObjectErrorBoundsTheDistanceOnTheDataMeshes) {
+  for (const char* name : {"elephant-with-holes_2798v.off", "mech-holes-shark_5246v.off", "decimated-knight_502v.off",
+                           "cow_cgal_2904v.off", "fandisk_6475v.obj"}) {
+    VARMESH_REQUIRE_SHARED(path, std::string("meshes/") + name);
+    const TriMesh m = read_mesh(path);
+    const VertexHierarchy h = build_vertex_hierarchy(m);
+    std::size_t faces = 0;
+    const double worst = worst_error_ratio(m, h, faces);
+    EXPECT_LE(worst, 1.25) << name << ": " << faces << " faces";
   }
 }
 
