@@ -36,7 +36,7 @@
 /// data folder (knight, cow, armadillo, gatech bunny, fandisk), 0.91x on the shark and 0.97x on the
 /// elephant, with 0-0.3 % more faces than without the leaf term; bumpy icospheres still reach 1.1-1.4x
 /// (later collapses of neighbours). The fan term costs about 4 % of the analysis time, the leaf term
-/// 2-8 % (bunny, dragon at 1 %).
+/// 10-15 % (bunny, dragon at 1 %; BENCHMARKS.md).
 /// All three are nested by construction and do not depend on QemOptions::cost.
 #include <cstddef>
 #include <functional>
