@@ -405,6 +405,11 @@ constexpr std::size_t kSparse = 5;
 constexpr std::size_t kSparse = 1;
 #endif
 
+// The long walks' cadence: the whole mesh at every kSparse-th step, the oracle and validate() 50 times sparser.
+void sparse_checks(WalkOptions& o) {
+  o.full_every = kSparse, o.oracle_every = 50 * kSparse, o.validate_every = 50 * kSparse;
+}
+
 struct WalkResult {
   std::size_t steps = 0, splits = 0, collapses = 0;
   std::size_t refused = 0, failed_splits = 0;  ///< ecols that returned false, vsplits that did not split
@@ -858,7 +863,8 @@ TEST(SrMesh, RandomWalksMatchDualPieceOracleKimLee) {
     const VertexHierarchy h = full_hierarchy(m);
     SrMesh sr(h);
     WalkOptions o;
-    o.ops = 40000, o.seed = seed++, o.full_every = kSparse, o.oracle_every = 50 * kSparse, o.validate_every = 50 * kSparse;
+    o.ops = 40000, o.seed = seed++;
+    sparse_checks(o);
     const WalkResult r = checked_walk(sr, o);
     ASSERT_TRUE(r.ok);
     total += r.ops();
@@ -895,7 +901,8 @@ TEST(SrMesh, RandomWalksMatchDualPieceOracleOnParallelHierarchies) {
     }
     SrMesh sr(h);
     WalkOptions o;
-    o.ops = 40000, o.seed = seed++, o.full_every = kSparse, o.oracle_every = 50 * kSparse, o.validate_every = 50 * kSparse;
+    o.ops = 40000, o.seed = seed++;
+    sparse_checks(o);
     const WalkResult r = checked_walk(sr, o);
     ASSERT_TRUE(r.ok);
     EXPECT_GT(r.selective_splits, 10000u);
@@ -913,7 +920,8 @@ TEST(SrMesh, BaselineWalksFollowTheirRules) {
       SCOPED_TRACE(scheme_name(s));
       SrMesh sr(h, s);
       WalkOptions o;
-      o.ops = 6000, o.seed = seed++, o.full_every = kSparse, o.oracle_every = 50 * kSparse, o.validate_every = 50 * kSparse;
+      o.ops = 6000, o.seed = seed++;
+      sparse_checks(o);
       const WalkResult r = checked_walk(sr, o);
       ASSERT_TRUE(r.ok);
       EXPECT_GT(r.splits, 1000u);
