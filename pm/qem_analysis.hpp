@@ -34,8 +34,8 @@
 /// next to neighbours coarser than when it was made, are not measured): Kim-Lee extractions at
 /// object_error(E), E = 0.05 % to 2 % of the diagonal, measured at most 0.91x E on the closed meshes of the
 /// data folder (knight, cow, armadillo, gatech bunny, fandisk), 0.91x on the shark and 0.97x on the
-/// elephant, with 0-0.3 % more faces than without the leaf term; bumpy icospheres still reach 1.1-1.4x
-/// (later collapses of neighbours). The fan term costs about 4 % of the analysis time, the leaf term
+/// elephant, with 0-0.3 % more faces than without the leaf term; bumpy icospheres reach 1.0-1.4x, once
+/// 2.1x in 80 (a front that joins a node to some neighbours refined to leaves and others left coarse). The fan term costs about 4 % of the analysis time, the leaf term
 /// 10-15 % (bunny, dragon at 1 %; BENCHMARKS.md).
 /// All three are nested by construction and do not depend on QemOptions::cost.
 #include <cstddef>
