@@ -725,7 +725,7 @@ int run(int argc, char** argv) {
   info->add_option("FILE", info_path, "mesh or hierarchy file")->required();
 
   TerrainArgs ta;
-  auto* terrain = app.add_subcommand("terrain", "Build the 4-8 hierarchy of a height field and extract an adapted mesh");
+  auto* terrain = app.add_subcommand("terrain", "Build the 4-8 hierarchy of a height field and extract an adapted mesh by error, camera or budget");
   terrain->add_option("HEIGHTFIELD", ta.input, "height field: .pgm, .png, .raw/.f32 (float32 LE, give --raw-size)")->required();
   terrain->add_option("-o,--output", ta.output, "output mesh (.obj, .ply, .off)")->required();
   terrain->add_option("--error", ta.error, "largest vertical error allowed (height units); guaranteed over every sample")->check(check_non_negative);

@@ -965,11 +965,12 @@ void add_compare_options(CLI::App& sub, CompareArgs& args) {
   sub.add_option("--data", args.data_dir,
                  "data folder (default $VARMESH_DATA, else ../shared/data; missing files are taken from the packaged "
                  "meshes or generated)");
-  sub.add_option("--image", args.image, "image for the image case (PNG or PGM; default images/peppers_256_gray.png)")
+  sub.add_option("--image", args.image,
+                 "image for the image case (PNG or PGM; default images/peppers_256_gray.png in the data folder)")
       ->check(check_file_name);
-  sub.add_option("--features", args.feature_fraction, "fraction of pixels kept as Sobel feature points (default 0.05)")->type_name("FRACTION");
-  sub.add_option("--size", args.grid_size, "side of the image and terrain grids in vertices (default 128, 64 with --quick)")->type_name("N");
-  sub.add_option("--panel", args.panel, "side of one picture panel in pixels (default 400)")->type_name("PIXELS");
+  sub.add_option("--features", args.feature_fraction, "fraction of pixels kept as Sobel feature points, in (0, 1] (default 0.05)")->type_name("FRACTION");
+  sub.add_option("--size", args.grid_size, "side of the image and terrain grids in vertices, 8..1024 (default 128, 64 with --quick)")->type_name("N");
+  sub.add_option("--panel", args.panel, "side of one picture panel in pixels, 64..2048 (default 400)")->type_name("PIXELS");
   sub.add_option("--cost", args.cost,
                  "collapse cost of the analysis: quadric (Garland-Heckbert order, volume-preserving placement; "
                  "default), quadric-plain (vs at the quadric's minimiser) or lindstrom-turk")

@@ -37,7 +37,7 @@
 namespace varmesh::app {
 
 void add_build_options(CLI::App& sub, BuildArgs& a) {
-  sub.add_option("INPUT", a.input, "mesh (.obj/.off/.ply), height field (.pgm/.png/.raw), or torus | saddle | implicit-torus")->required();
+  sub.add_option("INPUT", a.input, "mesh (.obj/.off/.ply), height field (.pgm/.png/.raw/.f32), or torus | saddle | implicit-torus")->required();
   sub.add_option("-o,--output", a.output, "output hierarchy (.vrm)")->required();
   sub.add_option("--method", a.method, "semiregular (default) | adaptive | simplify4k")->check(check_not_empty);
   sub.add_option("--levels", a.levels,
@@ -48,7 +48,7 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
                  "adaptive only: geometric tolerance, > 0 (default: 1% of the height range of a height field; torus "
                  "0.0685, saddle 0.002, implicit-torus 0.046, the paper's figures)")
       ->check(check_positive);
-  sub.add_option("--raw-size", a.raw_size, "adaptive on a .raw float32 height field: W,H")->check(check_not_empty);
+  sub.add_option("--raw-size", a.raw_size, "adaptive on a .raw/.f32 float32 height field: W,H")->check(check_not_empty);
   sub.add_option("--max-triangles", a.max_triangles,
                  "semiregular: refuse, before the build, a hierarchy whose finest mesh would have more faces than "
                  "this (base faces x 2^levels; default 2^22 = 4194304, about 1 GB and 10 s; at most 2^31)")
@@ -104,14 +104,21 @@ void add_pm_build_options(CLI::App& sub, PmBuildArgs& a) {
                  "quadric's minimiser) or lindstrom-turk");
   sub.add_option("--lt-finish", a.lt_finish,
                  "quadric costs with --faces or --vertices: from this many times the target on, order and place the "
-                 "collapses by Lindstrom-Turk costs (default 4; 0: quadrics to the end, better for models with thin parts "
-                 "taken down to tens of faces: the cow at 58 faces has half the error)")
+                 "collapses by Lindstrom-Turk costs (0 or a factor > 1; default 4; 0: quadrics to the end, better for "
+                 "models with thin parts taken down to tens of faces: the cow at 58 faces has half the error)")
       ->each([&a](const std::string&) { a.lt_finish_given = true; });
-  auto* faces = sub.add_option("--faces", a.faces, "stop at this many faces (default: the smallest base mesh)")->check(check_count);
-  sub.add_option("--vertices", a.vertices, "stop at this many vertices (instead of --faces)")->check(check_count)->excludes(faces);
+  // Option texts instead of CLI11's "UINT Excludes: ...", which pushed the descriptions onto a line of their own.
+  auto* faces = sub.add_option("--faces", a.faces,
+                               "stop at this many faces (default: the smallest base mesh; not with --vertices)")
+                    ->option_text("N")
+                    ->check(check_count);
+  sub.add_option("--vertices", a.vertices, "stop at this many vertices (instead of --faces)")
+      ->option_text("N")
+      ->check(check_count)
+      ->excludes(faces);
   sub.add_option("--max-error", a.max_error, "no collapse whose error exceeds this (object units): those are skipped, the others go on")
       ->check(check_non_negative);
-  sub.add_flag("--colors", a.colors, "colour quadrics (GH98) when the mesh has vertex colours");
+  sub.add_flag("--colors", a.colors, "colour quadrics (GH98): the mesh must have vertex colours; --cost quadric only");
   sub.add_option("--non-manifold", a.non_manifold, "split (default): cut non-manifold edges and vertices into sheets; "
                                                     "lock: also keep the copies from collapsing");
   sub.add_option("--threads", a.threads,

@@ -487,8 +487,8 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
                  "file it equals 48, on a polygon file or cube/torus it re-pairs their triangulation")
       ->check(check_not_empty);
   sub.add_option("--levels", a.levels,
-                 "dyadic levels (faces x4 each): 2 binary 4-8 steps (48, catmull-clark, linear, quasi48), "
-                 "2 Zwart-Powell steps, 1 Doo-Sabin step")
+                 "dyadic levels (faces x4 each; this or --steps is required): 2 binary 4-8 steps (48, catmull-clark, "
+                 "linear, quasi48), 2 Zwart-Powell steps, 1 Doo-Sabin step")
       ->each([&a](const std::string&) { a.levels_given = true; });
   sub.add_option("--steps", a.steps, "elementary steps instead: binary 4-8 steps (odd allowed), Zwart-Powell or Doo-Sabin steps")
       ->each([&a](const std::string&) { a.steps_given = true; });
