@@ -386,6 +386,8 @@ TEST(CliReview, HelpOfOptionsThatNeedAnotherReadsProperly) {
       {"query", "--up", "--up X,Y,Z"},
       {"query", "--pixels", "--pixels PIXELS"},
       {"query", "--viewport", "--viewport PIXELS"},
+      {"pm build", "--faces", "--faces N"},
+      {"pm build", "--vertices", "--vertices N"},
       {"pm query", "--view", "--view X,Y,Z"},
       {"pm query", "--pixels", "--pixels PIXELS"},
       {"subdiv", "--pixels", "--pixels PIXELS"},
