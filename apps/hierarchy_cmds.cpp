@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
 
@@ -685,7 +687,10 @@ int run_pm_build(const PmBuildArgs& a) {
     throw InvalidInput("--colors orders and places by the colour quadrics: --cost " + a.cost + " would be ignored");
   const TriMesh mesh = read_input_mesh(a.input);
   if (a.colors && !mesh.has_colors()) throw InvalidInput("pm build --colors: '" + a.input + "' has no vertex colours");
-  if (!a.quiet)
+  // The progress line is rewritten in place, which only a terminal shows as one line: redirected to a file
+  // or a pipe, every update would pile up on a single line of the log, so there it is left out.
+  const bool progress = !a.quiet && isatty(fileno(stderr)) == 1;
+  if (progress)
     o.progress = [&](std::size_t done, std::size_t left) {
       std::fprintf(stderr, "\r[varmesh] %zu collapses, %zu vertices left   ", done, left);
     };
@@ -696,7 +701,7 @@ int run_pm_build(const PmBuildArgs& a) {
   } catch (const InvalidInput& e) {
     throw IoError(a.input, e.what());  // name the file (e.g. "mesh has no non-degenerate face")
   }
-  if (!a.quiet && st.collapses >= 4096) std::fprintf(stderr, "\n");
+  if (progress && st.collapses >= 4096) std::fprintf(stderr, "\n");
   // Measured before the file is written: a measurement that fails leaves no file.
   std::optional<SurfaceDistance> distance;
   if (a.measure) distance = vertex_to_surface_distance(mesh, mesh_after_collapses(h, h.num_collapses()));

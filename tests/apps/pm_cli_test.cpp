@@ -106,6 +106,20 @@ TEST(PmCli, ThreadsGiveTheLibrarysParallelHierarchy) {
   EXPECT_TRUE(differs_from_serial);
 }
 
+// Without --quiet, pm build's progress line is rewritten in place with carriage returns: only on a
+// terminal. Here stderr is a file, as in a log: no carriage return, and no line of progress (the torus of
+// 65,536 faces takes more than 4,096 collapses, the first report).
+TEST(PmCli, ProgressStaysOutOfALog) {
+  const fs::path dir = testing::scratch_dir("pm_cli_progress");
+  const fs::path mesh = dir / "torus.obj", vmh = dir / "torus.vmh";
+  write_mesh(mesh.string(), testing::make_torus(256, 128));
+  const CmdResult r = run("pm build " + mesh.string() + " -o " + vmh.string() + " --faces 600", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  ASSERT_GT(read_vertex_hierarchy(vmh.string()).num_collapses(), 4096u);
+  EXPECT_FALSE(contains(r.err, "\r")) << r.err;
+  EXPECT_FALSE(contains(r.err, "collapses,")) << r.err;
+}
+
 // --measure reports the library's vertex-to-surface distance: for pm build from the input's vertices to the
 // base mesh, for pm query from the original vertices to the extracted mesh (0 at full resolution).
 TEST(PmCli, MeasureReportsTheDistanceToTheOriginal) {
