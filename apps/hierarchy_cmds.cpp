@@ -189,9 +189,12 @@ void print_metrics(const Mt& mt, bool semiregular = false) {
 const std::string kVmhMagic = "VMPMHIER";
 const std::string kVrmMagic("VMSHMT\r\n", 8);
 
-// The first 8 bytes of `path`; 8 zero bytes when it cannot be opened or is shorter.
+// The first 8 bytes of `path`; 8 zero bytes when it cannot be opened, is shorter or is not a regular file (a
+// FIFO would block the open; the loaders then say what it is).
 std::string file_magic(const std::string& path) {
   char magic[8] = {};
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return std::string(magic, sizeof magic);
   std::ifstream in(path, std::ios::binary);
   if (!in || !in.read(magic, sizeof magic)) std::fill(std::begin(magic), std::end(magic), '\0');
   return std::string(magic, sizeof magic);

@@ -11,22 +11,6 @@
 
 namespace varmesh {
 
-std::string read_file(const std::string& path) {
-  // A folder opens as a stream on Linux, and seeking to its end reports a size of up to 2^63 bytes.
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw IoError(path, "cannot read: it is a folder, not a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
-  std::string data;
-  in.seekg(0, std::ios::end);
-  const auto size = in.tellg();
-  if (size < 0) throw IoError(path, "cannot determine the file size");
-  data.resize(static_cast<std::size_t>(size));
-  in.seekg(0, std::ios::beg);
-  if (size > 0 && !in.read(data.data(), size)) throw IoError(path, "read failed");
-  return data;
-}
-
 namespace {
 
 std::string describe(std::filesystem::file_type type) {
@@ -40,6 +24,27 @@ std::string describe(std::filesystem::file_type type) {
 }
 
 }  // namespace
+
+std::string read_file(const std::string& path) {
+  // A folder opens as a stream on Linux, and seeking to its end reports a size of up to 2^63 bytes. A FIFO
+  // blocks the open until something writes to it (forever, with no writer), and a device reads as empty or
+  // endless: none of them has a size to read, so only a regular file (links followed) is opened.
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(st)) throw IoError(path, "cannot read: it is a folder, not a file");
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+    throw IoError(path, "cannot read: it is " + describe(st.type()) + ", not a regular file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
+  std::string data;
+  in.seekg(0, std::ios::end);
+  const auto size = in.tellg();
+  if (size < 0) throw IoError(path, "cannot determine the file size");
+  data.resize(static_cast<std::size_t>(size));
+  in.seekg(0, std::ios::beg);
+  if (size > 0 && !in.read(data.data(), size)) throw IoError(path, "read failed");
+  return data;
+}
 
 std::filesystem::path resolve_output_path(const std::string& path) {
   namespace fs = std::filesystem;

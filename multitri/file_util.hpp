@@ -5,7 +5,8 @@
 
 namespace varmesh {
 
-/// Reads a whole file into memory. Throws IoError (a folder, or a file that cannot be opened or read).
+/// Reads a whole file into memory. Throws IoError (a folder, a FIFO, a device or a socket, which are refused
+/// before they are opened; or a file that cannot be opened or read).
 std::string read_file(const std::string& path);
 
 /// Where a write to `path` lands, by the output policy of every writer: `path` itself when it is a regular

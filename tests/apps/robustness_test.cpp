@@ -461,6 +461,15 @@ CmdResult run_with_file_limit(int blocks, const std::string& args, const fs::pat
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, testing::slurp(out), testing::slurp(err)};
 }
 
+// `varmesh <args>` under timeout(1): a command that waits forever ends with status 124 instead.
+CmdResult run_with_timeout(int seconds, const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string cmd = "timeout " + std::to_string(seconds) + " " + VARMESH_EXE + " " + args + " >" + out.string() +
+                          " 2>" + err.string();
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, testing::slurp(out), testing::slurp(err)};
+}
+
 // Every entry of `dir` whose name says it is a staging file or folder.
 std::vector<std::string> staging_leftovers(const fs::path& dir) {
   std::vector<std::string> found;
@@ -868,6 +877,36 @@ TEST(Robustness, FailedWritesInStagedFoldersNameTheFinalPath) {
   }
   EXPECT_FALSE(fs::exists(demo));
   EXPECT_FALSE(fs::exists(fig));
+}
+
+// A FIFO given as an input blocked the open until something wrote to it: with no writer, every command
+// hung (info, query, pm query, terrain, render). A link to a device read as an empty file ("no faces").
+// Both are refused by what they are, before they are opened; `timeout` turns a regression into a failure.
+TEST(Robustness, SpecialFilesGivenAsInputsAreRefusedWithoutWaiting) {
+  const auto dir = testing::scratch_dir("robust_special_inputs");
+  for (const char* name : {"m.obj", "h.vrm", "h.vmh", "t.pgm"}) ASSERT_EQ(::mkfifo((dir / name).c_str(), 0644), 0);
+  fs::create_symlink("/dev/zero", dir / "zero.obj");
+  const std::string out = (dir / "out.obj").string();
+  const struct {
+    std::string args, says;
+  } cases[] = {
+      {"info " + (dir / "m.obj").string(), (dir / "m.obj").string() + ": cannot read: it is a named pipe (FIFO)"},
+      {"info " + (dir / "h.vrm").string(), (dir / "h.vrm").string() + ": cannot read: it is a named pipe (FIFO)"},
+      {"render " + (dir / "m.obj").string() + " -o " + (dir / "r.png").string(), "named pipe (FIFO), not a regular file"},
+      {"query " + (dir / "h.vrm").string() + " --error 1 -o " + out, (dir / "h.vrm").string() + ": cannot read"},
+      {"pm query " + (dir / "h.vmh").string() + " --error 1 -o " + out, (dir / "h.vmh").string() + ": cannot read"},
+      {"terrain " + (dir / "t.pgm").string() + " --error 1 -o " + out, (dir / "t.pgm").string() + ": cannot read"},
+      {"info " + (dir / "zero.obj").string(), (dir / "zero.obj").string() + ": cannot read: it is a character device"},
+  };
+  for (const auto& c : cases) {
+    const CmdResult r = run_with_timeout(60, c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.says)) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir / "r.png"));
+  EXPECT_TRUE(fs::is_fifo(dir / "m.obj"));
 }
 
 // Out of memory printed "std::bad_alloc" alone. Address space limited by ulimit -v, which the sanitizers'
