@@ -333,8 +333,8 @@ void write_staged(const std::string& target, const std::function<void(const std:
   // Checked first: the rename at the end would fail (a folder) or replace a FIFO or device after the rest
   // (the pictures) had been written. A symbolic link is written through: the file staged beside its target.
   const fs::path t = resolve_output_path(target);
-  const fs::path staged = t.parent_path() / ("." + t.stem().string() + ".partial-" + std::to_string(::getpid()) +
-                                             fs::path(target).extension().string());
+  const std::string suffix = ".partial-" + std::to_string(::getpid()) + fs::path(target).extension().string();
+  const fs::path staged = t.parent_path() / bounded_file_name(".", t.stem().string(), suffix);
   std::error_code ec;
   try {
     write(staged.string());
@@ -465,8 +465,8 @@ void StagedFolder::commit() {
       if (m.to != fs::path(m.user)) {
         // A symbolic link, written through. Its target may lie on another file system than the staging
         // folder: the file is copied beside it first, and renamed onto it with the others.
-        const fs::path copy = m.to.parent_path() / ("." + m.to.filename().string() + ".partial-" +
-                                                    std::to_string(::getpid()) + "-" + std::to_string(moves.size()));
+        const std::string suffix = ".partial-" + std::to_string(::getpid()) + "-" + std::to_string(moves.size());
+        const fs::path copy = m.to.parent_path() / bounded_file_name(".", m.to.filename().string(), suffix);
         std::error_code ec;
         fs::copy_file(m.from, copy, fs::copy_options::overwrite_existing, ec);
         if (ec) {

@@ -46,6 +46,12 @@ std::string read_file(const std::string& path) {
   return data;
 }
 
+std::string bounded_file_name(const std::string& prefix, const std::string& name, const std::string& suffix) {
+  constexpr std::size_t kNameMax = 255;
+  const std::size_t fixed = prefix.size() + suffix.size();
+  return prefix + name.substr(0, fixed < kNameMax ? kNameMax - fixed : 0) + suffix;
+}
+
 std::filesystem::path resolve_output_path(const std::string& path) {
   namespace fs = std::filesystem;
   // As many links as the kernel follows (MAXSYMLINKS on Linux).
@@ -82,7 +88,8 @@ void write_file_atomically(const std::string& path, const std::string& contents)
   const fs::path target = resolve_output_path(path);
   // A unique temporary name next to the file replaced keeps the rename on one file system.
   std::random_device rd;
-  const fs::path tmp = target.parent_path() / (".tmp." + target.filename().string() + "." + std::to_string(rd()));
+  const fs::path tmp =
+      target.parent_path() / bounded_file_name(".tmp.", target.filename().string(), "." + std::to_string(rd()));
   {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw IoError(path, std::string("cannot create a temporary file: ") + std::strerror(errno));

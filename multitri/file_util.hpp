@@ -18,6 +18,11 @@ std::string read_file(const std::string& path);
 /// as it is: the write then fails and says why.
 std::filesystem::path resolve_output_path(const std::string& path);
 
+/// `prefix` + `name` + `suffix` as one file name of at most 255 bytes (NAME_MAX of Linux file systems), `name`
+/// cut to fit. Temporary files are named after the file they replace: a name near the limit is valid, and
+/// its temporary name must be too (a 250-byte output name failed with "File name too long").
+std::string bounded_file_name(const std::string& prefix, const std::string& name, const std::string& suffix);
+
 /// Writes `contents` to `path` atomically: a temporary file in the folder of resolve_output_path(path),
 /// flushed, then renamed over that file (so a symbolic link at `path` keeps pointing to the new file). On
 /// any failure the temporary file is removed and IoError naming `path` is thrown; `path` is left untouched.

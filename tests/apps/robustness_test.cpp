@@ -909,6 +909,29 @@ TEST(Robustness, SpecialFilesGivenAsInputsAreRefusedWithoutWaiting) {
   EXPECT_TRUE(fs::is_fifo(dir / "m.obj"));
 }
 
+// An output name of 250 bytes is valid (255 is the limit), but its temporary names, the name with a prefix
+// and a suffix, were not: every writer failed with "cannot create a temporary file: File name too long".
+TEST(Robustness, OutputNamesNearTheLengthLimitAreWritten) {
+  const auto dir = testing::scratch_dir("robust_long_names");
+  const fs::path field = write_small_terrain(dir);
+  const std::string stem(246, 'n');  // 250 bytes with ".obj"
+  const std::string mesh = (dir / (stem + ".obj")).string(), png = (dir / (stem + ".png")).string();
+  CmdResult r = run("terrain " + field.string() + " --raw-size 17,17 --error 1 -o " + mesh + " --png " + png, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_GT(read_mesh(mesh).num_faces(), 0u);
+  EXPECT_GT(read_png(png).width, 0u);
+  const std::string vmh = (dir / (stem + ".vmh")).string();
+  r = run("pm build " + mesh + " --quiet -o " + vmh, dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(vmh));
+  const std::string longest(255, 'x');
+  write_file_atomically((dir / longest).string(), "contents");
+  EXPECT_EQ(testing::slurp(dir / longest), "contents");
+  EXPECT_TRUE(staging_leftovers(dir).empty());
+  EXPECT_EQ(bounded_file_name(".", std::string(300, 'a'), ".partial-1.obj").size(), 255u);
+  EXPECT_EQ(bounded_file_name(".tmp.", "short.obj", ".7"), ".tmp.short.obj.7");
+}
+
 // Out of memory printed "std::bad_alloc" alone. Address space limited by ulimit -v, which the sanitizers'
 // shadow memory cannot live with.
 TEST(Robustness, OutOfMemoryIsSaid) {
