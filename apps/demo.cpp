@@ -199,6 +199,9 @@ int run_demo(const DemoArgs& a) {
   cam.aspect = 16.0f / 9.0f;
   cam.z_near = 0.001f * diagonal;
   cam.z_far = 4.0f * diagonal;
+  // A needle (heights spanning 1e17 widths, which spread_samples leaves alone) is seen straight down: +z
+  // is then no up for the picture (the renderer refused it, after all the work), and another axis is taken.
+  cam.up = cam.view_up();
   Grid48Front view(*grid);
   Query qv;
   qv.criterion = Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::screen_error(cam, 1080.0f, a.pixels)});

@@ -282,6 +282,15 @@ void Target::draw_line(ScreenPoint a, ScreenPoint b, int thickness, const glm::v
   }
 }
 
+// Whether a clipped point `p` (screen position `s`) lies where clipping puts it: in front of the eye and
+// within the guard band (with a margin). Coordinates of 1e18 units with a near plane at 1 round in the
+// clipping to a w <= 0 or a position far outside: such a point has no trustworthy position, and its
+// fixed-point coordinates overflowed int64 (a crash of the demo on a needle-shaped height field).
+bool on_guard_band(const glm::vec4& p, const ScreenPoint& s, const Target& target) {
+  const double reach_x = double(kGuard) * target.width(), reach_y = double(kGuard) * target.height();
+  return p.w > 0.0f && std::abs(s.x) <= reach_x && std::abs(s.y) <= reach_y;
+}
+
 // Sutherland-Hodgman against the planes named in `planes` (outcode bits), then a fan. The intersection on
 // an edge is always computed from its inside end, so two triangles sharing the edge get the same point.
 void clip_and_fill(Target& target, const ClipVertex (&tri)[3], unsigned planes) {
@@ -315,6 +324,7 @@ void clip_and_fill(Target& target, const ClipVertex (&tri)[3], unsigned planes) 
   for (int i = 0; i < n; ++i) {
     const ClipVertex& v = buf[cur][i];
     const ScreenPoint s = to_screen(v.p, target.width(), target.height());
+    if (!on_guard_band(v.p, s, target)) return;
     rv[i] = RasterVertex{to_fixed(s.x), to_fixed(s.y), s.iw, v.c * s.iw};
   }
   for (int i = 1; i + 1 < n; ++i) target.fill_triangle(rv[0], rv[i], rv[i + 1]);
@@ -346,8 +356,9 @@ void draw_clip_segment(Target& target, glm::vec4 a, glm::vec4 b, int thickness, 
   if (!finite4(a) || !finite4(b)) return;  // huge coordinates overflowed the transform
   if (outcode(a, 1.0f) & outcode(b, 1.0f)) return;
   if (!clip_segment(a, b)) return;
-  target.draw_line(to_screen(a, target.width(), target.height()), to_screen(b, target.width(), target.height()),
-                   thickness, color);
+  const ScreenPoint sa = to_screen(a, target.width(), target.height()), sb = to_screen(b, target.width(), target.height());
+  if (!on_guard_band(a, sa, target) || !on_guard_band(b, sb, target)) return;
+  target.draw_line(sa, sb, thickness, color);
 }
 
 void check_camera(const Camera& cam) {

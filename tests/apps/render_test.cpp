@@ -453,6 +453,40 @@ TEST(RenderClipping, CameraInsideAClosedMeshSeesItEverywhere) {
   EXPECT_EQ(count_non_black(render_mesh(sphere, cam, o)), 0u);
 }
 
+TEST(RenderClipping, PointsThatClippingCannotPlaceAreSkipped) {
+  // The demo's top view of a needle-shaped height field (heights 0, 1e18 and 2e18 on a 17 x 17 grid): the
+  // eye stands at the height of the tallest samples (2e18 + 24 rounds to 2e18) with a near plane of 0.8.
+  // Clipping at that scale rounded points to w <= 0; their screen positions overflowed the fixed-point
+  // coordinates (signed overflow, then a write outside the picture in the wireframe).
+  TriMesh m;
+  constexpr int kN = 17;
+  for (int y = 0; y < kN; ++y)
+    for (int x = 0; x < kN; ++x) m.positions.push_back({float(x), float(y), 1e18f * float((y * kN + x) % 3)});
+  for (int y = 0; y + 1 < kN; ++y)
+    for (int x = 0; x + 1 < kN; ++x) {
+      const auto v = [](int i, int j) { return static_cast<Index>(j * kN + i); };
+      m.indices.insert(m.indices.end(), {v(x, y), v(x + 1, y), v(x + 1, y + 1), v(x, y), v(x + 1, y + 1), v(x, y + 1)});
+    }
+  Camera top;
+  top.target = {8.0f, 8.0f, 0.0f};
+  top.eye = {8.0f, 8.0f, 2e18f + 24.0f};
+  top.up = {0.0f, 1.0f, 0.0f};
+  top.fov_y_deg = 45.0f;
+  top.aspect = 1.0f;
+  top.z_near = 0.8f;
+  top.z_far = 40.0f + 2e18f;
+  RenderOptions o = black_background();
+  o.width = o.height = 256;
+  o.wireframe = true;
+  o.wire_color = {0.0f, 1.0f, 0.0f};
+  const std::vector<Segment3> overlay = {{{0.0f, 0.0f, 2e18f}, {16.0f, 16.0f, 0.0f}, {1.0f, 0.0f, 0.0f}}};
+  const Image im = render_mesh(m, top, o, overlay);
+  ASSERT_EQ(im.width, 256u);
+  ASSERT_EQ(im.height, 256u);
+  // The samples at height 0 lie 2e18 below the eye, well inside the frustum: the ground shows.
+  EXPECT_GT(count_non_black(im), 0u);
+}
+
 TEST(RenderWireframe, AddsDarkPixelsOnTheEdgesOnly) {
   TriMesh m;
   add_square(m, 0.0f, 1.0f);

@@ -909,6 +909,23 @@ TEST(Robustness, SpecialFilesGivenAsInputsAreRefusedWithoutWaiting) {
   EXPECT_TRUE(fs::is_fifo(dir / "m.obj"));
 }
 
+// The demo on a needle (heights up to 2e18 on 17 x 17 samples, beyond spread_samples' reach): its view
+// camera looked straight down with +z up ("render: camera up is zero or parallel to the view direction",
+// after all the work), and its top view crashed the renderer (clipped points with w <= 0).
+TEST(Robustness, DemoDrawsANeedleHeightField) {
+  const auto dir = testing::scratch_dir("robust_demo_needle");
+  HeightField needle;
+  needle.width = needle.height = 17;
+  for (std::size_t i = 0; i < 17 * 17; ++i) needle.z.push_back(1e18f * float(i % 3));
+  write_heightfield_raw((dir / "n.f32").string(), needle);
+  const fs::path out = dir / "demo";
+  const CmdResult r = run("demo --quiet --heightfield " + (dir / "n.f32").string() + " --raw-size 17,17 --out " + out.string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* name : {"uniform.png", "view_camera.png", "uniform_topdown.png", "view_topdown.png"})
+    EXPECT_GT(read_png((out / name).string()).width, 0u) << name;
+  EXPECT_GT(read_mesh((out / "view.obj").string()).num_faces(), 0u);
+}
+
 // An output name of 250 bytes is valid (255 is the limit), but its temporary names, the name with a prefix
 // and a suffix, were not: every writer failed with "cannot create a temporary file: File name too long".
 TEST(Robustness, OutputNamesNearTheLengthLimitAreWritten) {
