@@ -83,6 +83,8 @@ void add_error_and_camera_criteria(float error, const std::string& camera, float
   cam.z_near = 1e-4f * distance;
   cam.z_far = 1e8f * distance;
   if (!std::isfinite(cam.z_far)) throw InvalidInput("--camera: eye and target are too far apart");
+  // Distinct points whose distance squares to zero in float (1e-30 apart): the near plane would be 0.
+  if (!(cam.z_near > 0.0f)) throw InvalidInput("--camera: eye and target are too close together");
   parts.push_back(Criterion::any_of({Criterion::outside_frustum(cam.frustum()), Criterion::back_facing(cam.eye),
                                      Criterion::screen_error(cam, viewport, pixels)}));
 }
@@ -597,8 +599,16 @@ int cmd_terrain(const TerrainArgs& a) {
     const glm::vec3 hi(float(field.width - 1) * a.spacing, float(field.height - 1) * a.spacing,
                        *std::max_element(field.z.begin(), field.z.end()));
     const float reach = glm::length(cam.eye - 0.5f * (lo + hi)) + glm::length(hi - lo);
-    cam.z_near = std::min(0.1f * a.spacing, 1e-3f * reach);
+    // The terrain's own span is measurable (read_checked_heightfield): only the eye can be this far away.
+    if (!std::isfinite(2.0f * reach))
+      throw InvalidInput("--camera: the eye is too far from the terrain (" + a.camera + ")");
+    // The near plane at most 1e12 times nearer than the far one: beyond that ratio (--spacing 1e-40) the far
+    // plane's rows cancel even in double, and the frustum has no far plane.
+    cam.z_near = std::max(std::min(0.1f * a.spacing, 1e-3f * reach), 1e-12f * reach);
     cam.z_far = std::max(2.0f * reach, 10.0f * cam.z_near);
+    if (!(cam.z_near > 0.0f))
+      throw InvalidInput("--camera: the eye and the terrain are too close together to be told apart in float (" +
+                         a.camera + ", --spacing " + format_g(a.spacing) + ")");
     parts.push_back(Criterion::outside_frustum(cam.frustum()));
     parts.push_back(Criterion::screen_error(cam, a.viewport, a.pixels));
   }
@@ -661,6 +671,8 @@ int cmd_render(const RenderArgs& a) {
   refuse_same_file(a.input, "the input mesh", a.output, "-o");
   if (!a.view.empty() && !a.eye.empty()) throw InvalidInput("render: --view and --eye both place the eye; give one of them");
   check_picture_axes(a.up, a.view);
+  // CLI11's range check lets NaN through.
+  if (!(a.fov >= 1.0f && a.fov <= 170.0f)) throw InvalidInput("--fov must be a number in [1, 170]");
   const glm::vec3 up = a.up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_vec3(a.up, "--up");
   const TriMesh mesh = read_input_mesh(a.input);
   const float aspect = float(a.width) / float(a.height);

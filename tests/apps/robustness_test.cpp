@@ -909,6 +909,45 @@ TEST(Robustness, SpecialFilesGivenAsInputsAreRefusedWithoutWaiting) {
   EXPECT_TRUE(fs::is_fifo(dir / "m.obj"));
 }
 
+// Cameras that float cannot place failed with the words of an internal check ("camera: z_near 0.000000 and
+// z_far 0.000000 must satisfy ...", "frustum: plane 5 is not finite"), or not at all; render --fov nan
+// passed CLI11's range check and was named "camera fov_y_deg".
+TEST(Robustness, CamerasBeyondFloatsReachAreNamedByTheirOption) {
+  const auto dir = testing::scratch_dir("robust_camera_reach");
+  const fs::path field = write_small_terrain(dir);
+  std::ofstream(dir / "a.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const std::string a = (dir / "a.obj").string(), vmh = (dir / "h.vmh").string(), out = (dir / "out.obj").string();
+  CmdResult r = run("pm build " + a + " --quiet -o " + vmh, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string terrain = "terrain " + field.string() + " --raw-size 17,17 -o " + out;
+  const struct {
+    std::string args, says;
+  } cases[] = {
+      {"pm query " + vmh + " -o " + out + " --camera 1e-30,0,0,0,0,0,40", "--camera: eye and target are too close together"},
+      {"subdiv " + a + " --steps 1 --adaptive --camera 1e-30,0,0,0,0,0,40 -o " + out,
+       "--camera: eye and target are too close together"},
+      {terrain + " --camera 1e20,8,10,8,8,0,40", "--camera: the eye is too far from the terrain"},
+      {terrain + " --camera 1e-40,1e-40,1e-40,0,0,0,40 --spacing 1e-40 --z-scale 1e-40",
+       "--camera: the eye and the terrain are too close together"},
+      {"render " + a + " -o " + (dir / "r.png").string() + " --fov nan", "--fov must be a number in [1, 170]"},
+  };
+  for (const auto& c : cases) {
+    r = run(c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_TRUE(contains(r.err, c.says)) << c.args << "\n" << r.err;
+    EXPECT_FALSE(contains(r.err, "z_near") || contains(r.err, "frustum") || contains(r.err, "fov_y_deg"))
+        << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir / "r.png"));
+  // Samples 1e-40 apart seen from afar: the near plane is kept within 1e12 of the far one (the frustum had
+  // no far plane), and the extraction goes through.
+  r = run(terrain + " --camera 10,10,100,10,10,0,40 --spacing 1e-40", dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_GT(read_mesh(out).num_faces(), 0u);
+}
+
 // The demo on a needle (heights up to 2e18 on 17 x 17 samples, beyond spread_samples' reach): its view
 // camera looked straight down with +z up ("render: camera up is zero or parallel to the view direction",
 // after all the work), and its top view crashed the renderer (clipped points with w <= 0).
