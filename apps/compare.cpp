@@ -394,6 +394,7 @@ Options parse_options(const CompareArgs& a) {
 
 struct CaseInput {
   std::string name, type, criteria, source;
+  std::string file;  // the model file read, named by errors about its mesh; empty for generated input
   TriMesh mesh;
   bool use_colors = false;
   // Image case: the picture, its features (pixel = input vertex ids) and the Sobel threshold fraction.
@@ -501,7 +502,8 @@ struct ModelSpec {
 // The packaged stand-in of a model (Debian libcgal-demo: data/meshes/cow.off, the same cow as the data
 // folder's; data/meshes/bunny00.off, a closed 37.7k-vertex bunny in the Stanford bunny's axes), or nothing
 // when the archive is not installed or has no such model. A corrupt archive is an error, not a fallback.
-std::optional<TriMesh> packaged_model(const Options& o, const std::string& name, std::string& source) {
+std::optional<TriMesh> packaged_model(const Options& o, const std::string& name, std::string& source,
+                                      std::string& file) {
   const char* member = name == "cow" ? "data/meshes/cow.off" : name == "bunny" ? "data/meshes/bunny00.off" : nullptr;
   std::error_code ec;
   if (member == nullptr || o.packaged.empty() || !fs::is_regular_file(o.packaged, ec)) return std::nullopt;
@@ -509,6 +511,7 @@ std::optional<TriMesh> packaged_model(const Options& o, const std::string& name,
   if (!data) return std::nullopt;
   TriMesh mesh = read_input_mesh_data(o.packaged.string() + ":" + member, *data);
   source = fs::path(member).filename().string() + " (libcgal-demo)";
+  file = o.packaged.string() + ":" + member;
   return mesh;
 }
 
@@ -528,7 +531,7 @@ CaseInput model_case(const Options& o, const std::string& name) {
   c.criteria = "V.F. & B.F.C.";
   const std::string file = data_file(o, o.quick ? spec.quick_file : spec.file);
   std::optional<TriMesh> packaged;
-  if (file.empty()) packaged = packaged_model(o, name, c.source);
+  if (file.empty()) packaged = packaged_model(o, name, c.source, c.file);
   if (packaged) {
     c.mesh = std::move(*packaged);
   } else if (file.empty()) {
@@ -543,6 +546,7 @@ CaseInput model_case(const Options& o, const std::string& name) {
   } else {
     c.mesh = read_input_mesh(file);  // coordinates beyond float's reach refused by name, as the other commands do
     c.source = fs::path(file).filename().string();
+    c.file = file;
   }
   c.mesh.normals.clear();
   c.mesh.texcoords.clear();
@@ -552,6 +556,11 @@ CaseInput model_case(const Options& o, const std::string& name) {
   for (Index i : c.mesh.indices) box.add(c.mesh.positions[i]);
   const glm::vec3 centre = box.center();
   const float radius = 0.5f * box.diagonal();
+  // All faces on one point (or within 1e-19 of it, where squared lengths underflow): no picture can frame
+  // the model ("frame_sphere: radius 0.000000 is not a positive number", naming no file).
+  if (!(radius > 0.0f))
+    throw IoError(c.file, "the model has no size: every vertex of its faces lies at one point (" +
+                              std::to_string(c.mesh.num_faces()) + " faces)");
   c.view = c.backface = true;
   c.view_cam.target = centre + spec.target_offset * radius;
   c.view_cam.eye = c.view_cam.target + glm::normalize(spec.view_dir) * (1.4f * radius);
@@ -645,7 +654,12 @@ CaseResult run_case(CaseInput in, const Options& o, bool& failed) {
   {
     const std::string what = "analysing " + in.name + " (" + in.source + ")";
     Step step(what.c_str(), o.quiet);
-    h = build_vertex_hierarchy(in.mesh, qo, &qs);
+    try {
+      h = build_vertex_hierarchy(in.mesh, qo, &qs);
+    } catch (const InvalidInput& e) {
+      if (in.file.empty()) throw;
+      throw IoError(in.file, e.what());  // name the model file (e.g. "mesh has no non-degenerate face")
+    }
   }
   r.analysis_ms = analysis.ms();
   r.original_vertices = h.num_leaves();

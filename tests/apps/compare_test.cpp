@@ -300,5 +300,31 @@ TEST(Compare, ThinPicturesAreScaledOrNamed) {
   EXPECT_NE(r.err.find(thin + ": "), std::string::npos) << r.err;
 }
 
+// A model file of the data folder whose faces are all degenerate, or all on one point, failed with the words
+// of the analysis or of the camera ("mesh has no non-degenerate face", "frame_sphere: radius 0.000000 is not a
+// positive number") and named no file. Both now name it, and leave no output folder.
+TEST(Compare, ModelsWithoutSizeOrFacesAreNamed) {
+  const fs::path dir = testing::scratch_dir("compare_flat_models");
+  const fs::path data = dir / "data", cow = data / "meshes" / "cow_cgal_2904v.off";
+  fs::create_directories(data / "meshes");
+  const struct {
+    const char* off;
+    const char* says;
+  } cases[] = {
+      {"OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 0 1\n3 1 2 2\n", "mesh has no non-degenerate face"},
+      {"OFF\n4 2 0\n1 1 1\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n3 0 2 3\n", "the model has no size"},
+      {"OFF\n4 2 0\n0 0 0\n1e-40 0 0\n0 1e-40 0\n0 0 1e-40\n3 0 1 2\n3 0 2 3\n", "the model has no size"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.off);
+    std::ofstream(cow) << c.off;
+    const CmdResult r = run("--quick --quiet --cases cow --data " + data.string() + " --out " + (dir / "out").string(), dir);
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(count(r.err, "\n"), 1) << r.err;
+    EXPECT_NE(r.err.find(cow.string() + ": " + c.says), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+  }
+}
+
 }  // namespace
 }  // namespace varmesh
