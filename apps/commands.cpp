@@ -716,6 +716,16 @@ int cmd_render(const RenderArgs& a) {
   // A camera that sees none of the mesh (a --target or --eye away from it) gave a white picture and
   // "rendered N triangles": refused, nothing written.
   const std::size_t drawn = pixels_unlike(picture, o.background);
+  // The default view frames the whole bounding box: when it shows nothing, the faces are far smaller than
+  // the box (a stray vertex far away), which the camera's position did not say.
+  if (drawn == 0 && a.eye.empty() && a.target.empty()) {
+    Box3 box;
+    for (Index i : mesh.indices) box.add(mesh.positions[i]);
+    throw IoError(a.input, "no face covers a pixel of the default view, which frames the bounding box of the faces (" +
+                               format_g(double(box.diagonal())) +
+                               " across): the faces are far smaller than the box (a vertex far from the others?), or "
+                               "have no area; nothing was written");
+  }
   if (drawn == 0)
     throw InvalidInput("render: the camera sees none of the mesh (eye " + xyz(cam.eye) + ", target " + xyz(cam.target) +
                        "): the picture would be empty; nothing was written");

@@ -988,6 +988,24 @@ TEST(Robustness, OutputNamesNearTheLengthLimitAreWritten) {
   EXPECT_EQ(bounded_file_name(".tmp.", "short.obj", ".7"), ".tmp.short.obj.7");
 }
 
+// With no camera option, a mesh whose faces are sub-pixel in the default view (one stray vertex 1e15 away
+// sets the framing) or have no area was refused as "the camera sees none of the mesh (eye ..., target ...)",
+// blaming a camera the user had not given and naming no file.
+TEST(Robustness, RenderNamesAMeshTheDefaultViewCannotShow) {
+  const auto dir = testing::scratch_dir("robust_render_default_view");
+  std::ofstream(dir / "stray.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e15 1e15 1e15\nv 1e15 1e15 1.0000001e15\n"
+                                      "v 1e15 1.0000001e15 1e15\nf 1 2 3\nf 4 5 6\n";
+  std::ofstream(dir / "point.obj") << "v 2 2 2\nv 2 2 2\nv 2 2 2\nf 1 2 3\n";
+  for (const char* name : {"stray.obj", "point.obj"}) {
+    const std::string mesh = (dir / name).string(), png = (dir / "p.png").string();
+    const CmdResult r = run("render " + mesh + " -o " + png, dir);
+    EXPECT_EQ(r.status, 1) << name << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_TRUE(contains(r.err, mesh + ": no face covers a pixel of the default view")) << r.err;
+    EXPECT_FALSE(fs::exists(png));
+  }
+}
+
 // Out of memory printed "std::bad_alloc" alone. Address space limited by ulimit -v, which the sanitizers'
 // shadow memory cannot live with.
 TEST(Robustness, OutOfMemoryIsSaid) {
