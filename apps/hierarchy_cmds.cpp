@@ -565,6 +565,15 @@ int run_query(const QueryArgs& a) {
     }));
   }
   const Mt mt = read_mt(a.input);
+  // read_mt keeps any finite coordinates; the meshes extracted from them must be measurable, as every
+  // mesh the commands read (read_input_mesh). A file edited or damaged with a valid checksum wrote a mesh
+  // varmesh could not read back, and --png failed with "render: camera needs 0 < z_near < z_far".
+  Box3 box;
+  for (const glm::vec3& p : mt.positions()) box.add(p);
+  if (!std::isfinite(box.diagonal()))
+    throw IoError(a.input, "the coordinates span more than about 1.8e19: squared distances overflow float (the "
+                           "bounding box's diagonal cannot be measured, and varmesh could not read the extracted "
+                           "mesh back)");
   MtFront front(mt);
   const auto [st, mesh, ms, distance] = extract_and_write(front, parts, a, [&] {
     MtFront finest(mt);  // every node applied: nodes are numbered parents first

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -17,6 +18,7 @@
 #include "multitri/mesh_io.hpp"
 #include "multitri/terrain_gen.hpp"
 #include "apps/cli_support.hpp"
+#include "multitri/mt_file_edit.hpp"
 #include "test_support.hpp"
 
 namespace varmesh {
@@ -1003,6 +1005,32 @@ TEST(Robustness, RenderNamesAMeshTheDefaultViewCannotShow) {
     EXPECT_EQ(count_lines(r.err), 1) << r.err;
     EXPECT_TRUE(contains(r.err, mesh + ": no face covers a pixel of the default view")) << r.err;
     EXPECT_FALSE(fs::exists(png));
+  }
+}
+
+// A .vrm with a coordinate near 3.4e38 and valid checksums (edited, or damaged and re-sealed) was queried:
+// the mesh written could not be read back by varmesh, and --png failed with "render: camera needs 0 <
+// z_near < z_far < inf, got z_near inf". The file is now refused by name, as read_input_mesh refuses meshes.
+TEST(Robustness, QueryRefusesAHierarchyBeyondFloatsReach) {
+  const auto dir = testing::scratch_dir("robust_query_extent");
+  std::ofstream(dir / "q.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const std::string vrm = (dir / "h.vrm").string(), out = (dir / "out.obj").string();
+  CmdResult r = run("build " + (dir / "q.obj").string() + " --levels 1 --quiet -o " + vrm, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::string bytes = testing::slurp(vrm);
+  const float huge = 3.0e38f;
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &huge, sizeof bits);
+  testing::put_le(bytes, testing::kVrmHeaderBytes + 4, bits, 4);  // vertex 0's y
+  testing::reseal(bytes);
+  std::ofstream(vrm, std::ios::binary) << bytes;
+  for (const std::string& extra : {std::string(), " --png " + (dir / "q.png").string()}) {
+    r = run("query " + vrm + " --error 0 -o " + out + extra, dir);
+    EXPECT_EQ(r.status, 1) << extra << "\n" << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_TRUE(contains(r.err, vrm + ": the coordinates span more than about 1.8e19")) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(dir / "q.png"));
   }
 }
 
