@@ -181,11 +181,15 @@ ElementBound leaf_bound(const glm::vec3& pv, double r2, Index count, NormalAt&& 
   return ElementBound{pv, std::nextafter(static_cast<float>(std::sqrt(r2)), std::numeric_limits<float>::infinity()), 0.0f, cone};
 }
 
-// A face's unit normal from its corners, w = 1; all 0 for a face of zero area.
+// A face's unit normal from its corners, w = 1; all 0 for a face of zero area. In double, as
+// VertexHierarchy::validate() checks the leaves' cones: float differences of corners far from the origin
+// (a sliver with a corner at 2^31) turned the normal by more than the cone's slack, and pm build wrote a
+// file that its own reader refused.
 glm::vec4 unit_normal(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
-  const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
-  const float len = glm::length(n);
-  return len > 0.0f ? glm::vec4(n / len, 1.0f) : glm::vec4(0.0f);
+  const glm::dvec3 q0(p0);
+  const glm::dvec3 n = glm::cross(glm::dvec3(p1) - q0, glm::dvec3(p2) - q0);
+  const double len = glm::length(n);
+  return len > 0.0 && std::isfinite(len) ? glm::vec4(glm::vec3(n / len), 1.0f) : glm::vec4(0.0f);
 }
 
 // Distance from q to the segment [s0, s1].

@@ -192,6 +192,21 @@ TEST(QemAnalysis, ClosedMeshLosesTwoFacesPerCollapse) {
   EXPECT_EQ(h.base_faces().size(), 4u);
 }
 
+// A cube with one corner moved to x = 2^31 - 1: its faces there are slivers whose normals, computed in float
+// from the corners' differences, turned by more than a leaf cone's slack, and pm build wrote a file that its
+// own reader refused ("the normal of face 3 is outside its normal cone", helper-76's fuzzing). The leaf
+// cones must hold the normals validate() computes, and the file must read back.
+TEST(QemAnalysis, LeafConesHoldTheNormalsOfSliversFarOut) {
+  TriMesh m;
+  m.positions = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {2147483647.0f, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
+  for (const std::array<Index, 4>& q : {std::array<Index, 4>{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}})
+    m.indices.insert(m.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  const VertexHierarchy h = build_vertex_hierarchy(m);
+  EXPECT_NO_THROW(h.validate());
+  const std::vector<std::uint8_t> bytes = encode_vertex_hierarchy(h);
+  EXPECT_NO_THROW(decode_vertex_hierarchy(bytes, "far-out cube"));
+}
+
 TEST(QemAnalysis, StopsAtTargets) {
   const TriMesh m = make_icosphere(3);  // 642 vertices
   QemOptions o;
