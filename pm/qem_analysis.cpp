@@ -22,6 +22,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <exception>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -29,6 +30,8 @@
 #include <span>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <utility>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -135,6 +138,56 @@ class LtConstraints {
   glm::dvec3 a_[3];
   double b_[3] = {0, 0, 0};
   int n_ = 0;
+};
+
+// What a Lindstrom-Turk placement reads of the faces around an edge, as sums that can be added, taken back and
+// moved to another origin in O(1): per face plane (n, d) with d = n.c0 - n.o in coordinates centred on o, the
+// volume terms sum n, sum d, sum d^2, sum d n and sum n n^T; per border edge p -> q (e = q - p, pq = p x q),
+// sum e, sum pq, sum e x pq, sum |pq|^2 and sum (|e|^2 I - e e^T); per neighbour w, sum (w - o) and their
+// count. Every face or border edge is weighted by `s` (+1, or -1 to take one back).
+struct LtMoments {
+  glm::dvec3 n{0.0}, c{0.0}, h0{0.0}, h1{0.0}, h2{0.0};
+  double d = 0.0, k = 0.0;
+  glm::dvec3 e1{0.0}, e2{0.0}, cb{0.0}, g0{0.0}, g1{0.0}, g2{0.0};
+  double kb = 0.0, borders = 0.0;
+  glm::dvec3 nbr{0.0};
+  double nbrs = 0.0;
+
+  void plane(const glm::dvec3& nn, double dd, double s) noexcept {
+    n += s * nn, d += s * dd, k += s * (dd * dd);
+    h0 += (s * nn.x) * nn, h1 += (s * nn.y) * nn, h2 += (s * nn.z) * nn, c += (s * dd) * nn;
+  }
+  void border(const glm::dvec3& p, const glm::dvec3& q, double s) noexcept {
+    const glm::dvec3 e = q - p, pq = glm::cross(p, q);
+    // |e x x + pq|^2 = x^T (|e|^2 I - e e^T) x - 2 (e x pq).x + |pq|^2
+    const double ee = glm::dot(e, e);
+    e1 += s * e, e2 += s * pq;
+    g0 += s * (glm::dvec3(ee, 0, 0) - e.x * e);
+    g1 += s * (glm::dvec3(0, ee, 0) - e.y * e);
+    g2 += s * (glm::dvec3(0, 0, ee) - e.z * e);
+    cb += s * glm::cross(e, pq);
+    kb += s * glm::dot(pq, pq);
+    borders += s;
+  }
+  void neighbour(const glm::dvec3& w, double s) noexcept { nbr += s * w, nbrs += s; }
+  LtMoments& operator+=(const LtMoments& m) noexcept {
+    n += m.n, c += m.c, h0 += m.h0, h1 += m.h1, h2 += m.h2, d += m.d, k += m.k;
+    e1 += m.e1, e2 += m.e2, cb += m.cb, g0 += m.g0, g1 += m.g1, g2 += m.g2, kb += m.kb, borders += m.borders;
+    nbr += m.nbr, nbrs += m.nbrs;
+    return *this;
+  }
+  // The same sums about o + t: d -> d - n.t, and p -> p - t (so pq -> pq - t x e).
+  void move_origin(const glm::dvec3& t) noexcept {
+    const glm::dvec3 ht(glm::dot(h0, t), glm::dot(h1, t), glm::dot(h2, t));
+    k += glm::dot(t, ht) - 2.0 * glm::dot(t, c);
+    c -= ht;
+    d -= glm::dot(n, t);
+    const glm::dvec3 gt(glm::dot(g0, t), glm::dot(g1, t), glm::dot(g2, t));
+    kb += glm::dot(t, gt) - 2.0 * glm::dot(t, cb);
+    cb -= gt;
+    e2 -= glm::cross(t, e1);
+    nbr -= nbrs * t;
+  }
 };
 
 // A leaf's bound: the sphere around pv of radius sqrt(r2) (the largest squared distance to a corner of its
@@ -270,8 +323,27 @@ class Analysis {
 
   Placement place(Index a, Index b) const;
   Placement place_lt(Index a, Index b) const;
+  // Lindstrom-Turk's sums (LtMoments) around an edge, around a vertex (cached for a hub: a vertex of more
+  // than kHubFaces faces, whose sums would otherwise be taken again for each of its edges), and about a
+  // given origin; the shape objective's neighbours; the cost of a point.
+  static constexpr Index kHubFaces = 24;
+  struct LtHub {
+    LtMoments m;  // about the vertex's position, neighbours included
+    bool dirty = true;
+  };
+  LtMoments lt_edge_moments(Index a, Index b, const glm::dvec3& o) const;
+  LtMoments lt_moments(Index v, const glm::dvec3& o) const;
+  // Without the faces holding `except` and the border edge to it (the other end of an edge).
+  LtMoments lt_moments_about(Index v, const glm::dvec3& o, bool with_neighbours, Index except = kInvalid) const;
+  void lt_shape(Index a, Index b, const glm::dvec3& o, glm::dvec3& sum, double& count) const;
+  static double lt_cost(const LtMoments& m, const glm::dvec3& x, double len2);
+  // A face around v changed (a corner moved, or it died): its cached sums are taken again when next read.
+  void lt_touched(Index v) {
+    if (v < hub_of_.size() && hub_of_[v] != kInvalid) hubs_[hub_of_[v]].dirty = true;
+  }
   glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const;
-  void set_edge(Index e, Index a, Index b);
+  // Slot e becomes candidate (a, b) with its cost; in the queue unless `queue` is false (it stays out).
+  void set_edge(Index e, Index a, Index b, bool queue = true);
   void reinsert_edges_of(Index v);
   std::size_t switch_to_lt();  // returns the number of edges costed
   // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
@@ -394,6 +466,11 @@ class Analysis {
   std::vector<glm::dvec3> new_normal_;  // scratch of check() for collapse()
   std::vector<Index> new_fan_;          // scratch of check(): the faces of a and b that stay
   std::vector<std::uint8_t> stale_;     // per edge, Lindstrom-Turk only: costed before its neighbourhood changed
+  std::vector<std::uint8_t> link_refused_;  // per edge: its last verdict was the link condition's
+  mutable std::vector<Index> hub_of_;   // per slot, Lindstrom-Turk only: its entry of hubs_, or kInvalid
+  mutable std::vector<LtHub> hubs_;
+  mutable std::vector<std::uint32_t> lt_mark_;  // per slot, stamps of lt_moments_about()
+  mutable std::uint32_t lt_stamp_ = 0;
   std::vector<Index> uf_;               // per slot: the slot its node was collapsed into (itself while alive)
   std::vector<std::uint8_t> near_node_; // per slot: some neighbour was made by a collapse (a filter for check())
   std::vector<Run> ofadj_;              // per leaf: its input faces (dead ones included)
@@ -421,95 +498,184 @@ Analysis::Placement Analysis::place(Index a, Index b) const {
   return Placement{o.point, glm::dvec3(0.0), o.error, o.solved};
 }
 
-// LT98 on the current mesh: T = the faces around a or b (fl and fr included), B = their border edges with an
+// LT98 on the current mesh: T = the faces around a or b (fl and fr included), B = the border edges with an
 // end at a or b. Volume of the tetrahedron (x, t0, t1, t2) = (n_t.x - n_t.t0) / 6 with n_t = (t1 - t0) x
 // (t2 - t0); the area vector of triangle (x, p, q) for a border edge p -> q is ((q - p) x x + p x q) / 2.
-// Cost (LT99): 1/2 sum of squared volumes + 1/2 L^2 sum of squared border areas, L the edge length.
+// Cost (LT99): 1/2 sum of squared volumes + 1/2 L^2 sum of squared border areas, L the edge length. The
+// sums are those of a plus those of b, less what both hold: the faces on the edge, and the edge itself
+// when it is a border edge.
 Analysis::Placement Analysis::place_lt(Index a, Index b) const {
   // Local coordinates centred on a: the objectives' constant terms do not swamp their minima.
   const glm::dvec3 o = geo_[a].p;
-  auto pos = [&](Index v) { return geo_[v].p - o; };
-  glm::dvec3 nsum(0.0), hv0(0.0), hv1(0.0), hv2(0.0), cv(0.0);
-  double dsum = 0.0, kv = 0.0;
-  // The cached planes (one load per face instead of four): n.(c0 - o) = w - n.o.
-  auto add_face = [&](Index f) {
-    const glm::dvec4& pl = fplane_[f];
-    const glm::dvec3 n(pl);
-    const double d = pl.w - glm::dot(n, o);
-    nsum += n, dsum += d, kv += d * d;
-    hv0 += n.x * n, hv1 += n.y * n, hv2 += n.z * n, cv += d * n;
-  };
-  for (const Index* it = faces_begin(a); it != faces_end(a); ++it) add_face(*it);
-  for (const Index* it = faces_begin(b); it != faces_end(b); ++it)
-    if (std::find(faces_begin(a), faces_end(a), *it) == faces_end(a)) add_face(*it);  // fl, fr once
-  // Border edges: a directed edge x -> y of a face of a or b, with x or y in {a, b}, whose twin y -> x is in
-  // no face of a or b (the twin would hold the same end).
-  glm::dvec3 e1sum(0.0), e2sum(0.0), hb0(0.0), hb1(0.0), hb2(0.0), cb(0.0);
-  double kb = 0.0;
-  bool has_border = false;
-  if (border_[a] || border_[b]) {
-    auto has_directed = [&](Index x, Index y) {
-      for (Index v : {a, b})
-        for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
-          for (int k = 0; k < 3; ++k)
-            if (cur_[3 * *it + k] == x && cur_[3 * *it + (k + 1) % 3] == y) return true;
-      return false;
-    };
-    for (Index v : {a, b})
-      for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-        const Index f = *it;
-        if (v == b && (cur_[3 * f] == a || cur_[3 * f + 1] == a || cur_[3 * f + 2] == a)) continue;
-        for (int k = 0; k < 3; ++k) {
-          const Index x = cur_[3 * f + k], y = cur_[3 * f + (k + 1) % 3];
-          if (x != a && x != b && y != a && y != b) continue;
-          if (has_directed(y, x)) continue;
-          has_border = true;
-          const glm::dvec3 p = pos(x), q = pos(y);
-          const glm::dvec3 e = q - p, pq = glm::cross(p, q);
-          e1sum += e, e2sum += pq;
-          // |e x x + pq|^2 = x^T (|e|^2 I - e e^T) x - 2 (e x pq).x + |pq|^2
-          const double ee = glm::dot(e, e);
-          hb0 += glm::dvec3(ee, 0, 0) - e.x * e;
-          hb1 += glm::dvec3(0, ee, 0) - e.y * e;
-          hb2 += glm::dvec3(0, 0, ee) - e.z * e;
-          cb += glm::cross(e, pq);
-          kb += glm::dot(pq, pq);
-        }
-      }
-  }
+  const LtMoments m = lt_edge_moments(a, b, o);
   LtConstraints lc;
-  lc.add(nsum, dsum);  // volume preservation
-  if (has_border) {    // boundary preservation: the summed area vector vanishes
-    const double ee = glm::dot(e1sum, e1sum);
-    const glm::dvec3 e = e1sum;
+  lc.add(m.n, m.d);  // volume preservation
+  const bool has_border = m.borders > 0.5;
+  if (has_border) {  // boundary preservation: the summed area vector vanishes
+    const double ee = glm::dot(m.e1, m.e1);
+    const glm::dvec3& e = m.e1;
     lc.add_objective(glm::dvec3(ee, 0, 0) - e.x * e, glm::dvec3(0, ee, 0) - e.y * e, glm::dvec3(0, 0, ee) - e.z * e,
-                     glm::cross(e1sum, e2sum));
+                     glm::cross(m.e1, m.e2));
   }
-  lc.add_objective(hv0, hv1, hv2, cv);  // volume optimisation
-  if (has_border) lc.add_objective(hb0, hb1, hb2, cb);  // boundary optimisation
+  lc.add_objective(m.h0, m.h1, m.h2, m.c);  // volume optimisation
+  if (has_border) lc.add_objective(m.g0, m.g1, m.g2, m.cb);  // boundary optimisation
   if (lc.size() < 3) {  // shape optimisation: the sum of squared edge lengths at vs
     glm::dvec3 sum(0.0);
-    double m = 0.0;
-    for (const EdgeRef* e = edges_begin(a); e != edges_end(a); ++e)
-      if (e->to != b) sum += pos(e->to), m += 1.0;
-    for (const EdgeRef* e = edges_begin(b); e != edges_end(b); ++e) {
-      if (e->to == a) continue;
-      bool dup = false;
-      for (const EdgeRef* g = edges_begin(a); g != edges_end(a) && !dup; ++g) dup = g->to == e->to;
-      if (!dup) sum += pos(e->to), m += 1.0;
-    }
-    lc.add_objective({m, 0, 0}, {0, m, 0}, {0, 0, m}, sum);
+    double count = 0.0;
+    lt_shape(a, b, o, sum, count);
+    lc.add_objective({count, 0, 0}, {0, count, 0}, {0, 0, count}, sum);
   }
   glm::dvec3 x;
-  if (!lc.solve(x)) x = 0.5 * pos(b);
-  const double fv = LtConstraints::quadratic(hv0, hv1, hv2, x) - 2.0 * glm::dot(cv, x) + kv;
+  if (!lc.solve(x)) x = 0.5 * (geo_[b].p - o);
+  return Placement{x + o, glm::dvec3(0.0), lt_cost(m, x, glm::dot(geo_[b].p - o, geo_[b].p - o))};
+}
+
+// The cost of vs at x (about the origin of m).
+double Analysis::lt_cost(const LtMoments& m, const glm::dvec3& x, double len2) {
+  const double fv = LtConstraints::quadratic(m.h0, m.h1, m.h2, x) - 2.0 * glm::dot(m.c, x) + m.k;
   double cost = std::max(0.0, fv) / 36.0;
-  if (has_border) {
-    const double fb = LtConstraints::quadratic(hb0, hb1, hb2, x) - 2.0 * glm::dot(cb, x) + kb;
-    const glm::dvec3 d = pos(b);
-    cost += glm::dot(d, d) * std::max(0.0, fb) / 4.0;
+  if (m.borders > 0.5) {
+    const double fb = LtConstraints::quadratic(m.g0, m.g1, m.g2, x) - 2.0 * glm::dot(m.cb, x) + m.kb;
+    cost += len2 * std::max(0.0, fb) / 4.0;
   }
-  return Placement{x + o, glm::dvec3(0.0), cost};
+  return cost;
+}
+
+LtMoments Analysis::lt_edge_moments(Index a, Index b, const glm::dvec3& o) const {
+  // Those of one end, then those of the other but the faces on the edge and the edge itself. The first is
+  // the end with more faces when that is a hub (its sums come from the cache).
+  const bool hub = std::max(fadj_[a].cnt, fadj_[b].cnt) > kHubFaces;
+  const Index first = hub && fadj_[b].cnt > fadj_[a].cnt ? b : a, second = first == a ? b : a;
+  LtMoments m = lt_moments(first, o);
+  m += lt_moments_about(second, o, false, first);
+  return m;
+}
+
+// The faces, border edges and (for a hub) neighbours around v, about o.
+LtMoments Analysis::lt_moments(Index v, const glm::dvec3& o) const {
+  if (fadj_[v].cnt <= kHubFaces) return lt_moments_about(v, o, false);
+  if (hub_of_.size() < node_alive_.size()) hub_of_.resize(node_alive_.size(), kInvalid);
+  if (hub_of_[v] == kInvalid) {
+    hub_of_[v] = static_cast<Index>(hubs_.size());
+    hubs_.emplace_back();
+  }
+  LtHub& h = hubs_[hub_of_[v]];
+  if (h.dirty) {
+    h.m = lt_moments_about(v, geo_[v].p, true);
+    h.dirty = false;
+  }
+  LtMoments m = h.m;
+  m.move_origin(o - geo_[v].p);
+#if VARMESH_ENABLE_ASSERTS
+  {  // the cached sums, moved, against the sums taken about o
+    const LtMoments r = lt_moments_about(v, o, true);
+    auto near = [](double x, double y, double scale) { return std::abs(x - y) <= 1e-9 * scale; };
+    const double sv = 1.0 + std::abs(r.k) + glm::length(r.h0) + glm::length(r.h1) + glm::length(r.h2) +
+                      glm::length(r.c) + std::abs(r.d) + glm::length(r.n);
+    const double sb = 1.0 + std::abs(r.kb) + glm::length(r.g0) + glm::length(r.g1) + glm::length(r.g2) +
+                      glm::length(r.cb) + glm::length(r.e1) + glm::length(r.e2);
+    bool ok = near(m.k, r.k, sv) && near(m.d, r.d, sv) && m.borders == r.borders && near(m.kb, r.kb, sb);
+    for (int i = 0; i < 3; ++i)
+      ok = ok && near(m.n[i], r.n[i], sv) && near(m.c[i], r.c[i], sv) && near(m.h0[i], r.h0[i], sv) &&
+           near(m.h1[i], r.h1[i], sv) && near(m.h2[i], r.h2[i], sv) && near(m.e1[i], r.e1[i], sb) &&
+           near(m.e2[i], r.e2[i], sb) && near(m.cb[i], r.cb[i], sb) && near(m.g0[i], r.g0[i], sb) &&
+           near(m.g1[i], r.g1[i], sb) && near(m.g2[i], r.g2[i], sb);
+    VARMESH_ASSERT(ok);
+  }
+#endif
+  return m;
+}
+
+// The sums over the faces of v and, where v's dual piece touches the border, its border edges: face f at v
+// holds v -> next and prev -> v, and v -> next is a border edge when no face of v holds next -> v (next as
+// another face's prev), prev -> v when none holds v -> prev. Faces holding `except` and a border edge to it
+// are left out. With `with_neighbours` (a hub's cache), also the positions of the neighbours.
+LtMoments Analysis::lt_moments_about(Index v, const glm::dvec3& o, bool with_neighbours, Index except) const {
+  LtMoments m;
+  const Index* fb = faces_begin(v);
+  const Index cnt = fadj_[v].cnt;
+  for (Index i = 0; i < cnt; ++i) {
+    const Index* c = &cur_[3 * fb[i]];
+    if (c[0] == except || c[1] == except || c[2] == except) continue;
+    const glm::dvec4& pl = fplane_[fb[i]];
+    const glm::dvec3 n(pl);
+    m.plane(n, pl.w - glm::dot(n, o), 1.0);
+  }
+  if (!border_[v] && !with_neighbours) return m;
+  auto next_prev = [&](Index i) {
+    const Index* c = &cur_[3 * fb[i]];
+    const int k = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+    return std::pair{c[(k + 1) % 3], c[(k + 2) % 3]};
+  };
+  const glm::dvec3 pv = geo_[v].p - o;
+  if (cnt <= kHubFaces) {
+    std::array<Index, kHubFaces> nx, pv_;
+    for (Index i = 0; i < cnt; ++i) std::tie(nx[i], pv_[i]) = next_prev(i);
+    auto holds = [&](const std::array<Index, kHubFaces>& list, Index w) {
+      return std::find(list.begin(), list.begin() + cnt, w) != list.begin() + cnt;
+    };
+    for (Index i = 0; i < cnt; ++i) {
+      if (nx[i] != except && !holds(pv_, nx[i])) m.border(pv, geo_[nx[i]].p - o, 1.0);
+      if (pv_[i] != except && !holds(nx, pv_[i])) m.border(geo_[pv_[i]].p - o, pv, 1.0);
+    }
+    return m;  // a vertex this small is never cached: no neighbours asked for
+  }
+  // A hub: the same tests through stamps (lt_mark_), in O(degree).
+  if (lt_mark_.size() < node_alive_.size()) lt_mark_.resize(node_alive_.size(), 0);
+  auto stamp = [&] {
+    if (++lt_stamp_ == 0) std::fill(lt_mark_.begin(), lt_mark_.end(), 0), lt_stamp_ = 1;
+    return lt_stamp_;
+  };
+  if (border_[v]) {
+    const std::uint32_t prevs = stamp();
+    for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(i).second] = prevs;
+    for (Index i = 0; i < cnt; ++i)
+      if (const Index w = next_prev(i).first; w != except && lt_mark_[w] != prevs) m.border(pv, geo_[w].p - o, 1.0);
+    const std::uint32_t nexts = stamp();
+    for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(i).first] = nexts;
+    for (Index i = 0; i < cnt; ++i)
+      if (const Index w = next_prev(i).second; w != except && lt_mark_[w] != nexts) m.border(geo_[w].p - o, pv, 1.0);
+  }
+  if (with_neighbours) {
+    const std::uint32_t seen = stamp();
+    for (Index i = 0; i < cnt; ++i)
+      for (const Index w : {next_prev(i).first, next_prev(i).second})
+        if (lt_mark_[w] != seen) lt_mark_[w] = seen, m.neighbour(geo_[w].p - o, 1.0);
+  }
+  return m;
+}
+
+// LT98's shape objective: the neighbours of a or b other than a and b, their summed positions about o and
+// their count. Those of the end with more faces, g, from its cache when it is a hub; then each neighbour w of
+// the other end s that is not one of g's (no face of w holds g).
+void Analysis::lt_shape(Index a, Index b, const glm::dvec3& o, glm::dvec3& sum, double& count) const {
+  const Index s = fadj_[a].cnt <= fadj_[b].cnt ? a : b, g = s == a ? b : a;
+  auto neighbours = [&](Index v, std::vector<Index>& out) {
+    out.clear();
+    for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
+      for (int k = 0; k < 3; ++k)
+        if (cur_[3 * *it + k] != v) out.push_back(cur_[3 * *it + k]);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  };
+  std::vector<Index> ns;
+  if (fadj_[g].cnt > kHubFaces) {
+    const LtMoments mg = lt_moments(g, o);
+    sum = mg.nbr, count = mg.nbrs;
+  } else {
+    neighbours(g, ns);
+    sum = glm::dvec3(0.0), count = 0.0;
+    for (Index w : ns) sum += geo_[w].p - o, count += 1.0;
+  }
+  sum -= geo_[s].p - o, count -= 1.0;  // s is one of g's neighbours
+  neighbours(s, ns);
+  for (Index w : ns) {
+    if (w == g) continue;
+    bool common = false;
+    for (const Index* it = faces_begin(w); it != faces_end(w) && !common; ++it)
+      common = cur_[3 * *it] == g || cur_[3 * *it + 1] == g || cur_[3 * *it + 2] == g;
+    if (!common) sum += geo_[w].p - o, count += 1.0;
+  }
 }
 
 // QemOptions::preserve_volume: the quadric's minimiser p moved to the plane where the collapse keeps the
@@ -554,10 +720,10 @@ glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p, bool
 }
 
 // Slot e becomes candidate (a, b), with its cost, in the heap; the caller fixes the nodes' runs.
-void Analysis::set_edge(Index e, Index a, Index b) {
+void Analysis::set_edge(Index e, Index a, Index b, bool queue) {
   const Placement pl = place(a, b);
   edges_[e] = node_of_[a] < node_of_[b] ? Edge{a, b, pl.cost, kept(pl)} : Edge{b, a, pl.cost, kept(pl)};
-  heap_.update(e, edges_[e].cost, tie_key(edges_[e]));
+  if (queue) heap_.update(e, edges_[e].cost, tie_key(edges_[e]));
 }
 
 // From here on the collapses are ordered and placed by Lindstrom-Turk's memoryless costs (QemOptions::lt_finish):
@@ -686,10 +852,13 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
   // The other way round: how far a and b themselves end up from the new fan around vs (the planes above
   // see vs move, not the old vertices left behind; closed meshes gave up to 3x E in pm query --measure
   // without this). The nearest new face is searched until one is within the error found so far.
+  // (b from the end of the fan, where its own faces are: the minimum found is the same in any order, and a
+  // hub at a has many faces before them.)
   for (Index v : {a, b}) {
     const double bar = st.local * st.local;
     double best = std::numeric_limits<double>::infinity();
-    for (Index f : new_fan_) {
+    for (std::size_t i = 0; i < new_fan_.size(); ++i) {
+      const Index f = new_fan_[v == a ? i : new_fan_.size() - 1 - i];
       glm::dvec3 q[3];
       for (int k = 0; k < 3; ++k) {
         const Index w = cur_[3 * f + k];
@@ -862,6 +1031,10 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       raw_.ring_items.push_back(node_of_[w]);
     }
   raw_.ring_offsets.push_back(static_cast<Index>(raw_.ring_items.size()));
+  if (lt_) {  // every face that changed has vs and two of these as corners
+    lt_touched(vs);
+    for (Index w : ring_) lt_touched(w);
+  }
 
   // Candidate edges: the edge of each neighbour w of vs to a (or b) becomes the edge (vs, w), keeping its
   // slot and heap entry (a key update is cheaper than an erase plus a push); when w was a neighbour of both
@@ -896,7 +1069,12 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       EdgeRef* pos = std::find_if(run, run + eadj_[w].cnt, [&](const EdgeRef& r) { return r.edge == e; });
       if (link_[w] == kInvalid) {
         link_[w] = e;
-        set_edge(e, vs, w);
+        // An edge (a, w) refused by the link condition, w no neighbour of b, is refused as (vs, w): its faces
+        // are the same, and the common neighbours of w and vs hold those of w and a. It stays out of the
+        // queue (a hub absorbing its neighbours one by one would try each of its edges again each time).
+        const bool held = link_refused_[e] && w != vl && w != vr && !heap_.contains(e);
+        set_edge(e, vs, w, !held);
+        if (held) rejected_[vs] = 1;
         new_edges_.push_back({e, w});
         pos->to = vs;
       } else {
@@ -911,12 +1089,25 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   // and re-costed when they reach the top of the queue (run(): lazy evaluation), which costs one placement
   // per pop instead of one per edge of the second ring at every collapse (about 25). A stale edge that had
   // been rejected comes back into the queue.
+  // An edge (w, x) refused by the link condition, w a neighbour of vs, is refused again unless x is another
+  // neighbour of vs (both ends' faces and common neighbours may have changed), or x is vs and w one of the
+  // apexes vl, vr (see above): otherwise its faces, border and common neighbours are as they were. A hub
+  // next to every collapse would have each of its refused edges tried again after each one, in O(its
+  // degree) each.
+  ++stamp_;
+  for (Index w : ring_) mark_[w] = stamp_;
+  mark_[vs] = stamp_;
+  auto link_holds = [&](Index w, const EdgeRef& e) {
+    return link_refused_[e.edge] && (mark_[e.to] != stamp_ || (e.to == vs && w != vl && w != vr));
+  };
   if (lt_) {
     for (Index w : ring_)
       for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e) {
         if (e->to == vs) continue;
         stale_[e->edge] = 1;
-        if (!heap_.contains(e->edge)) heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
+        if (heap_.contains(e->edge)) continue;
+        if (link_holds(w, *e)) rejected_[w] = 1;
+        else heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
       }
   }
 
@@ -937,11 +1128,15 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   raw_.records.push_back(rec);
 
   // Neighbours that had an edge rejected get their edges re-examined: their neighbourhood just changed.
-  for (Index w : ring_)
-    if (rejected_[w]) {
-      rejected_[w] = 0;
-      reinsert_edges_of(w);
+  for (Index w : ring_) {
+    if (!rejected_[w]) continue;
+    rejected_[w] = 0;
+    for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e) {
+      if (heap_.contains(e->edge)) continue;
+      if (link_holds(w, *e)) rejected_[w] = 1;  // still out: tried again when x's neighbourhood changes
+      else heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
     }
+  }
 }
 
 void Analysis::init_faces() {
@@ -1638,6 +1833,7 @@ void Analysis::init_raw() {
 
 void Analysis::collapse_loop(QemStats& stats) {
   stale_.assign(lt_ ? edges_.size() : 0, 0);
+  link_refused_.assign(edges_.size(), 0);
   const std::size_t target_v = opt_.target_vertices;
   const std::size_t target_f = opt_.target_faces;
   auto done = [&] {
@@ -1714,6 +1910,28 @@ void Analysis::collapse_loop(QemStats& stats) {
       }
     } else {
       verdict = check(a, b, pl.p, step);
+      // Where LT's constraints are nearly dependent (long slivers around a hub: a fan of 10,000 faces) their
+      // point can lie far off the edge and turn faces over; the edge's midpoint and ends, cheapest first, get
+      // their chance then (a fan of slivers stopped at 118 of its 9,998 collapses without them).
+      if (lt_ && (verdict == Verdict::kFlip || (verdict == Verdict::kOk && too_far()))) {
+        const glm::dvec3 o = geo_[a].p, d = geo_[b].p - o;
+        const LtMoments m = lt_edge_moments(a, b, o);
+        std::array<std::pair<double, glm::dvec3>, 3> at{{{0.0, 0.5 * d}, {0.0, glm::dvec3(0.0)}, {0.0, d}}};
+        for (auto& [cost, x] : at) cost = lt_cost(m, x, glm::dot(d, d));
+        std::stable_sort(at.begin(), at.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+        for (const auto& [cost, x] : at) {
+          pl.p = x + o;
+          pl.cost = cost;
+          verdict = check(a, b, pl.p, step);
+          if (verdict != Verdict::kFlip && !(verdict == Verdict::kOk && too_far())) break;
+        }
+        // A point that costs more than the next edge waits for its turn in the queue (placed again then).
+        if (verdict == Verdict::kOk && !heap_.empty() && pl.cost > heap_.top_cost()) {
+          edges_[e].cost = pl.cost;
+          heap_.push(e, pl.cost, tie_key(edges_[e]));
+          continue;
+        }
+      }
     }
     if (next != kInvalid) touch_ends(edges_[next].a, edges_[next].b);
     // A collapse whose recorded error would exceed the limit is skipped like a rejected one: the queue is
@@ -1738,6 +1956,7 @@ void Analysis::collapse_loop(QemStats& stats) {
         case Verdict::kOk: break;
       }
       if (verdict != Verdict::kLocked && verdict != Verdict::kDepth) rejected_[a] = rejected_[b] = 1;
+      link_refused_[e] = verdict == Verdict::kLink;
     }
     if (next != kInvalid) touch_runs(edges_[next].a, edges_[next].b);
   }
