@@ -59,7 +59,12 @@ enum class CollapseCost {
   /// the squared volumes swept by each face, the squared areas swept by each border edge, and edge lengths;
   /// the cost is the volume term plus edge length^2 times the border term (border_penalty is not used).
   /// Every collapse re-costs the edges at vs and marks those of its neighbours stale; a stale edge is placed
-  /// again when it reaches the top of the queue (lazy evaluation): about 2x the time of kQuadric. At 1 % of
+  /// again when it reaches the top of the queue (lazy evaluation): about 2x the time of kQuadric. Around a
+  /// vertex of more than 24 faces (a hub: a polygon given as one fan, the pole of a cone) the sums over its
+  /// faces are cached and moved to each edge's origin, so an edge costs O(the other end's degree); where the
+  /// constrained point would turn a face over (nearly dependent constraints among long slivers), the edge's
+  /// midpoint and ends are tried, cheapest first, the collapse waiting its turn in the queue if that costs
+  /// more than the next edge. At 1 % of
   /// the faces it cuts the bunny's RMS error by a quarter and its max error by a seventh against quadrics to
   /// the end (lt_finish = 0; by a third and a half against the plain GH97 placement; vertex-to-surface
   /// distance), about as much as the default's Lindstrom-Turk finish does; unlike the finish it also shapes
