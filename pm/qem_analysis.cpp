@@ -319,6 +319,11 @@ class Analysis {
   const Index* faces_end(Index v) const { return fpool_.data() + fadj_[v].off + fadj_[v].cnt; }
   const EdgeRef* edges_begin(Index v) const { return epool_.data() + eadj_[v].off; }
   const EdgeRef* edges_end(Index v) const { return epool_.data() + eadj_[v].off + eadj_[v].cnt; }
+  // The EdgeRef of edge e in w's run (the one naming the other end), found in O(1) through epos_: a hub
+  // next to many collapses would otherwise be searched at each.
+  Index ref_in_run_of(Index e, Index w) const { return epool_[epos_[e][0]].to != w ? epos_[e][0] : epos_[e][1]; }
+  // A face's corner slot k at v.
+  int corner_of(Index f, Index v) const { return cur_[3 * f] == v ? 0 : (cur_[3 * f + 1] == v ? 1 : 2); }
   std::uint64_t tie_key(const Edge& e) const { return (std::uint64_t{node_of_[e.a]} << 32) | node_of_[e.b]; }
 
   Placement place(Index a, Index b) const;
@@ -327,6 +332,8 @@ class Analysis {
   // than kHubFaces faces, whose sums would otherwise be taken again for each of its edges), and about a
   // given origin; the shape objective's neighbours; the cost of a point.
   static constexpr Index kHubFaces = 24;
+  // Runs of fpool_ longer than this lose faces by a swap (collapse()), shorter ones keep their order.
+  static constexpr Index kOrderedRun = 64;
   struct LtHub {
     LtMoments m;  // about the vertex's position, neighbours included
     bool dirty = true;
@@ -446,6 +453,8 @@ class Analysis {
   std::vector<Index> fpool_;
   std::vector<Run> eadj_;                   // per node: its candidate edges
   std::vector<EdgeRef> epool_;
+  std::vector<std::array<Index, 2>> epos_;  // per edge: where its two EdgeRefs are in epool_ (either order)
+  std::vector<Index> fpos_;                 // per face corner: where the face is in that corner's run of fpool_
   std::vector<Edge> edges_;                 // slots: a collapse hands those of a and b on to vs
   detail::EdgeHeap heap_;                   // edges awaiting a verdict
   std::vector<Index> cur_;                  // current corners per face
@@ -1000,6 +1009,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       if (v == b)
         for (int k = 0; k < 3; ++k)
           if (cur_[3 * f + k] == b) cur_[3 * f + k] = vs;
+      fpos_[3 * f + corner_of(f, vs)] = static_cast<Index>(fpool_.size());
       fpool_.push_back(f);
       const double len = glm::length(*n1);  // as init_faces() on the relabelled face
       fnormal_[f] = len > 0.0 ? *n1 / len : glm::dvec3(0.0);
@@ -1010,11 +1020,26 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       cone = enclose_normal(cone, glm::vec3(n));
     }
   fadj_[vs] = {foff, static_cast<Index>(fpool_.size()) - foff};
+  // fl and fr leave the runs of the apexes: in order in a short run (the hierarchies of the meshes measured
+  // depend on that order), by moving the run's last face into their place in a long one (a hub that is an
+  // apex of every collapse around it: a cone of 100,000 slivers took minutes with the whole run moved).
   for (Index x : {vl, vr}) {
     if (x == kInvalid) continue;
-    Index* it = fpool_.data() + fadj_[x].off;
-    Index* out = std::remove_if(it, it + fadj_[x].cnt, [&](Index f) { return f == fl || f == fr; });
-    fadj_[x].cnt = static_cast<Index>(out - it);
+    Run& r = fadj_[x];
+    if (r.cnt <= kOrderedRun) {
+      Index* it = fpool_.data() + r.off;
+      Index* out = std::remove_if(it, it + r.cnt, [&](Index f) { return f == fl || f == fr; });
+      r.cnt = static_cast<Index>(out - it);
+      for (Index i = r.off; i < r.off + r.cnt; ++i) fpos_[3 * fpool_[i] + corner_of(fpool_[i], x)] = i;
+      continue;
+    }
+    for (Index f : {fl, fr}) {
+      if (f == kInvalid || (cur_[3 * f] != x && cur_[3 * f + 1] != x && cur_[3 * f + 2] != x)) continue;
+      const Index at = fpos_[3 * f + corner_of(f, x)], last = r.off + --r.cnt;
+      const Index g = fpool_[last];
+      fpool_[at] = g;
+      fpos_[3 * g + corner_of(g, x)] = at;
+    }
   }
 
   // Xia-Varshney stored ring: the neighbours of vs now.
@@ -1065,8 +1090,9 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     for (Index i = eadj_[v].off, end = i + eadj_[v].cnt; i < end; ++i) {
       const Index e = epool_[i].edge, w = epool_[i].to;
       if (w == a || w == b) continue;
-      EdgeRef* run = epool_.data() + eadj_[w].off;
-      EdgeRef* pos = std::find_if(run, run + eadj_[w].cnt, [&](const EdgeRef& r) { return r.edge == e; });
+      const Index at = ref_in_run_of(e, w);
+      EdgeRef* pos = epool_.data() + at;
+      VARMESH_ASSERT(pos->edge == e && at >= eadj_[w].off && at < eadj_[w].off + eadj_[w].cnt);
       if (link_[w] == kInvalid) {
         link_[w] = e;
         // An edge (a, w) refused by the link condition, w no neighbour of b, is refused as (vs, w): its faces
@@ -1075,11 +1101,15 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
         const bool held = link_refused_[e] && w != vl && w != vr && !heap_.contains(e);
         set_edge(e, vs, w, !held);
         if (held) rejected_[vs] = 1;
+        epos_[e] = {at, static_cast<Index>(epool_.size() + new_edges_.size())};  // vs's run is appended below
         new_edges_.push_back({e, w});
         pos->to = vs;
       } else {
         heap_.erase(e);
-        *pos = run[--eadj_[w].cnt];  // its slot stays unused
+        const Index last = eadj_[w].off + --eadj_[w].cnt;
+        const Index moved = epool_[last].edge;
+        *pos = epool_[last];  // its slot stays unused
+        epos_[moved][epos_[moved][0] == last ? 0 : 1] = at;
       }
     }
   eadj_[vs] = {static_cast<Index>(epool_.size()), static_cast<Index>(new_edges_.size())};
@@ -1154,10 +1184,12 @@ void Analysis::init_faces() {
   // Room for the runs of the new nodes: each collapse appends about one degree's worth.
   fpool_.reserve(2 * cur_.size());
   fpool_.resize(cur_.size());
+  fpos_.resize(3 * nf_);
   for (std::size_t f = 0; f < nf_; ++f) {
     if (!alive_[f]) continue;
     for (int k = 0; k < 3; ++k) {
       Run& r = fadj_[cur_[3 * f + k]];
+      fpos_[3 * f + k] = r.off + r.cnt;
       fpool_[r.off + r.cnt++] = static_cast<Index>(f);
     }
   }
@@ -1219,10 +1251,13 @@ void Analysis::init_edges() {
   }
   epool_.reserve(2 * static_cast<std::size_t>(off));
   epool_.resize(off);
+  epos_.resize(edges_.size());
   for (Index id = 0; id < edges_.size(); ++id) {
     const Edge& e = edges_[id];
-    epool_[eadj_[e.a].off + eadj_[e.a].cnt++] = {id, e.b};
-    epool_[eadj_[e.b].off + eadj_[e.b].cnt++] = {id, e.a};
+    const Index ia = eadj_[e.a].off + eadj_[e.a].cnt++, ib = eadj_[e.b].off + eadj_[e.b].cnt++;
+    epool_[ia] = {id, e.b};
+    epool_[ib] = {id, e.a};
+    epos_[id] = {ia, ib};
   }
   // Costs once every run is complete: a Lindstrom-Turk cost reads the runs of both ends (the neighbours of
   // its shape term). (Until 2026-11-24 each edge was costed as it joined the runs, so its first cost saw
