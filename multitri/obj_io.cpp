@@ -4,6 +4,7 @@
 // attributes per vertex. We keep the `v` statements as the vertices (so vertex ids match the file) and
 // give each vertex the vt/vn of the first corner that uses it; later corners that disagree are counted in
 // ReadInfo::attribute_conflicts rather than silently dropped or turned into split vertices.
+#include <algorithm>
 #include <charconv>
 #include <cstdint>
 #include <string>
@@ -125,7 +126,9 @@ class ObjParser {
     return static_cast<Index>(static_cast<std::int64_t>(count) + idx);
   }
 
-  // Parses "v", "v/vt", "v//vn" or "v/vt/vn".
+  // Parses "v", "v/vt", "v//vn" or "v/vt/vn". An empty slot means "not given", as exporters write it:
+  // "1//" and "1/" are "1", "1/2/" is "1/2". A slot that is not empty must be an index, and there are at
+  // most three slots ("1///" and "1/2/3/4" are refused).
   void parse_corner(std::string_view tok, Index& v, Index& vt, Index& vn) {
     const char* p = tok.data();
     const char* end = p + tok.size();
@@ -145,12 +148,10 @@ class ObjParser {
     if (*p != '/') cur_.fail("bad face corner " + quote(tok));
     ++p;
     if (p != end && *p != '/') vt = resolve(parse_index("texcoord"), texcoords_.size(), max_vt_, "texcoord");
-    if (p == end) {
-      if (vt == kInvalid) cur_.fail("bad face corner " + quote(tok));
-      return;
-    }
+    if (p == end) return;
     if (*p != '/') cur_.fail("bad face corner " + quote(tok));
     ++p;
+    if (p == end) return;
     vn = resolve(parse_index("normal"), normals_.size(), max_vn_, "normal");
     if (p != end) cur_.fail("bad face corner " + quote(tok));
   }
@@ -241,6 +242,14 @@ class ObjParser {
 }  // namespace
 
 TriMesh read_obj(const std::string& path, std::string_view data, ReadInfo& info) {
+  // Classic Mac OS ended lines with a lone CR. The cursor takes CR for a blank (that is how CRLF lines
+  // work), so such a file read as one long line and failed on its second statement ("bad number 'v'"). A
+  // file with a CR and no LF anywhere can only be one of those: its CRs become line ends, on a copy.
+  if (data.find('\n') == std::string_view::npos && data.find('\r') != std::string_view::npos) {
+    std::string lines(data);
+    std::replace(lines.begin(), lines.end(), '\r', '\n');
+    return ObjParser(path, lines, info).run();
+  }
   return ObjParser(path, data, info).run();
 }
 

@@ -462,6 +462,56 @@ TEST(MeshIoObj, ColoursWeightsForwardReferencesAndCrLf) {
   EXPECT_EQ(w.indices, (std::vector<Index>{0, 1, 2}));
 }
 
+// Classic Mac OS line ends (a lone CR): read as lines, with the same result and line numbers as LF.
+TEST(MeshIoObj, LoneCrLineEndsAreLineEnds) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_cr");
+  const std::string lf =
+      "# made on a Mac\nv 0 0 0\nv 1 0 0\n\nv 0 1 0\nv 1 1 0\nvt 0.5 0.25\nf 1/1 2/1 3/1\nf 2 4 3\n";
+  std::string cr = lf;
+  std::replace(cr.begin(), cr.end(), '\n', '\r');
+  write_text(dir / "lf.obj", lf);
+  write_text(dir / "cr.obj", cr);
+  const TriMesh expected = read_mesh((dir / "lf.obj").string());
+  ASSERT_EQ(expected.num_faces(), 2u);
+  expect_identical(expected, read_mesh((dir / "cr.obj").string()));
+  // An error names the line the CRs make (the 4th line is empty).
+  std::string bad = "v 0 0 0\rv 1 0 0\r\rv 0 1 0\rf 1 2 3\rf 1 2 x\r";
+  write_text(dir / "bad.obj", bad);
+  try {
+    read_mesh((dir / "bad.obj").string());
+    FAIL() << "accepted a bad corner";
+  } catch (const IoError& e) {
+    EXPECT_EQ(e.line(), 6u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad vertex index in face corner 'x'"), std::string::npos) << e.what();
+  }
+}
+
+// Empty texcoord or normal slots mean "not given": "1//" is "1", "1/2/" is "1/2". Filled slots still
+// have to be indices (the bad fixtures obj_corner_*).
+TEST(MeshIoObj, EmptyCornerSlotsAreNotGiven) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_empty_slots");
+  const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 0.25\nvn 0 0 1\n";
+  write_text(dir / "plain.obj", v + "f 1 2 3\n");
+  write_text(dir / "slashes.obj", v + "f 1// 2// 3//\n");
+  write_text(dir / "one_slash.obj", v + "f 1/ 2/ 3/\n");
+  const TriMesh plain = read_mesh((dir / "plain.obj").string());
+  expect_identical(plain, read_mesh((dir / "slashes.obj").string()));
+  expect_identical(plain, read_mesh((dir / "one_slash.obj").string()));
+  EXPECT_FALSE(plain.has_texcoords());
+  EXPECT_FALSE(plain.has_normals());
+  write_text(dir / "vt.obj", v + "f 1/1/ 2/1/ 3/1\n");
+  const TriMesh vt = read_mesh((dir / "vt.obj").string());
+  ASSERT_TRUE(vt.has_texcoords());
+  EXPECT_FALSE(vt.has_normals());
+  EXPECT_EQ(vt.texcoords[1], glm::vec2(0.5f, 0.25f));
+  write_text(dir / "vn.obj", v + "f 1//1 2// 3/1/1\n");
+  const TriMesh vn = read_mesh((dir / "vn.obj").string());
+  ASSERT_TRUE(vn.has_normals());
+  EXPECT_EQ(vn.normals[0], glm::vec3(0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(vn.normals[1], glm::vec3(0.0f));  // its corner gave none
+  EXPECT_EQ(vn.texcoords[2], glm::vec2(0.5f, 0.25f));
+}
+
 TEST(MeshIoText, Utf8ByteOrderMarkIsSkippedInObjAndOffOnly) {
   const fs::path dir = testing::scratch_dir("mesh_io_bom");
   const std::string bom = "\xEF\xBB\xBF";
@@ -571,6 +621,8 @@ const BadCase kBadCases[] = {
     {"obj_bad_number.obj", ":4: ", "bad number '1.5x' for vertex y"},
     {"obj_colour_mixed.obj", ":2: ", "v has no colour but earlier v statements do"},
     {"obj_colour_range.obj", ":1: ", "vertex colour component is outside [0, 1]"},
+    {"obj_corner_bad_texcoord.obj", ":5: ", "bad texcoord index in face corner '1/x/'"},
+    {"obj_corner_four_slots.obj", ":5: ", "bad normal index in face corner '3///'"},
     {"obj_index_garbage.obj", ":4: ", "bad vertex index in face corner 'three'"},
     {"obj_index_out_of_range.obj", ":6: ", "face refers to vertex 4 but the file has 3 v statements"},
     {"obj_index_zero.obj", ":4: ", "vertex index 0 is invalid"},
