@@ -134,7 +134,13 @@ PlyHeader parse_header(const std::string& path, std::string_view data) {
       else if (fmt == "binary_little_endian") h.format = PlyFormat::kBinaryLe;
       else if (fmt == "binary_big_endian") h.format = PlyFormat::kBinaryBe;
       else cur.fail("unsupported PLY format " + quote(fmt));
-      if (cur.token().empty()) cur.fail("the format line has no version");
+      // 1.0 is the only version there is; a file that says otherwise was written for a format this
+      // reader does not know, and guessing would misread it.
+      const std::string_view version = cur.token();
+      if (version.empty()) cur.fail("the format line has no version");
+      double v = 0.0;
+      if (parse_double(version, v) != NumberStatus::kOk || v != 1.0)
+        cur.fail("unsupported PLY format version " + quote(version) + " (only 1.0 is supported)");
       if (!cur.at_eol()) cur.fail("unexpected text on the format line");
       have_format = true;
     } else if (key == "element") {
@@ -374,6 +380,14 @@ class AsciiSource {
   std::int64_t item(PlyType t, const char* what) { return integer(t, what); }
   void skip_items(std::uint64_t n, PlyType) {
     for (std::uint64_t k = 0; k < n; ++k) next("a skipped list item");
+  }
+
+  // After the last element only blanks and empty lines may follow. Anything else means the header's
+  // counts do not describe the body (a face more than announced, say), which would otherwise be lost
+  // without a word.
+  void expect_end() {
+    const std::string_view tok = cur_.token_any_line();
+    if (!tok.empty()) fail("data after the last element declared in the header: " + quote(tok));
   }
 
  private:
@@ -618,6 +632,7 @@ TriMesh read_ply(const std::string& path, std::string_view data, ReadInfo& info)
   if (h.format == PlyFormat::kAscii) {
     AsciiSource src(path, data, h.body_offset, h.body_line);
     reader.read(src);
+    src.expect_end();
   } else {
     BinarySource src(path, data, h.body_offset, h.format == PlyFormat::kBinaryBe);
     reader.read(src);

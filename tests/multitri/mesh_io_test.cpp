@@ -341,6 +341,67 @@ TEST(MeshIoPly, CrLfHeaderAndColourGroupsAreOptional) {
   EXPECT_FALSE(m.has_normals());
 }
 
+// After the last element: blank lines and trailing blanks are fine, anything else is an error at its line
+// (it means the header's counts do not describe the body).
+TEST(MeshIoPly, AsciiBodyEndsWithTheLastElement) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_trailing");
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2";
+  write_text(dir / "blank.ply", header + body + "  \t\r\n\n   \n\r\n");
+  EXPECT_EQ(read_mesh((dir / "blank.ply").string()).indices, (std::vector<Index>{0, 1, 2}));
+  write_text(dir / "no_newline.ply", header + body);
+  EXPECT_EQ(read_mesh((dir / "no_newline.ply").string()).indices, (std::vector<Index>{0, 1, 2}));
+  struct Case {
+    const char* tail;
+    const char* where;
+    const char* token;
+  };
+  const Case cases[] = {
+      {" 7\n", ":13: ", "'7'"},          // one token too many on the last line
+      {"\n\n\njunk\n", ":16: ", "'junk'"},  // after blank lines
+      {"\ncomment x\n", ":14: ", "'comment'"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = (dir / "tail.ply").string();
+    write_text(path, header + body + c.tail);
+    try {
+      read_mesh(path);
+      ADD_FAILURE() << "accepted a body ending in " << c.tail;
+    } catch (const IoError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path + c.where + "data after the last element declared in the header: " + c.token),
+                std::string::npos)
+          << what;
+    }
+  }
+}
+
+// Version 1.0 is the only one: any other version is named as unsupported, whatever the encoding.
+TEST(MeshIoPly, FormatVersionOtherThanOneIsRefused) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_version");
+  const std::string rest =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  write_text(dir / "one.ply", "ply\nformat ascii 1\n" + rest);
+  EXPECT_EQ(read_mesh((dir / "one.ply").string()).num_faces(), 1u);
+  for (const char* format : {"ascii 2.0", "ascii 1.1", "binary_little_endian 2.0", "binary_big_endian 0.9", "ascii one"}) {
+    const std::string path = (dir / "v.ply").string();
+    write_text(path, std::string("ply\nformat ") + format + "\n" + rest);
+    try {
+      read_mesh(path);
+      ADD_FAILURE() << "accepted format " << format;
+    } catch (const IoError& e) {
+      const std::string what = e.what();
+      const std::string version = std::string(format).substr(std::string(format).find(' ') + 1);
+      EXPECT_NE(what.find(path + ":2: unsupported PLY format version '" + version + "' (only 1.0 is supported)"),
+                std::string::npos)
+          << what;
+    }
+  }
+}
+
 TEST(MeshIoPly, ElementWithoutPropertiesIsSkippedWhateverItsCount) {
   const fs::path dir = testing::scratch_dir("mesh_io_ply_empty_element");
   const std::string head = "ply\nformat ascii 1.0\nelement nothing 1000000000000\nelement vertex 3\n"
@@ -659,7 +720,9 @@ const BadCase kBadCases[] = {
     {"ply_bad_magic.ply", ":1: ", "not a PLY file"},
     {"ply_bad_number_ascii.ply", ":12: ", "bad number '1.0.0'"},
     {"ply_colour_out_of_range.ply", ":14: ", "vertex 1: float colour 'red' is outside [0, 1]"},
+    {"ply_data_after_body_ascii.ply", ":15: ", "data after the last element declared in the header: '3'"},
     {"ply_float_indices.ply", ":8: ", "vertex indices must have an integer type"},
+    {"ply_format_version.ply", ":2: ", "unsupported PLY format version '2.0' (only 1.0 is supported)"},
     {"ply_huge_count_ascii.ply", ":7: ", "element face count 99999999999 is larger than the file can hold"},
     {"ply_huge_count_binary.ply", ":4: ", "element vertex count 1000000000000 is larger than the file can hold"},
     {"ply_index_out_of_range_ascii.ply", ":13: ", "face 0: vertex index 7 out of range"},
