@@ -93,39 +93,45 @@ struct Input {
   std::string description;  // how `poly` was made, for the report
 };
 
+// The option the user gave the step count with, for the advice to lower it: a user who typed --steps
+// looks for --steps in the message.
+const char* count_option(const SubdivArgs& a) { return a.steps_given ? "--steps" : "--levels"; }
+
 // The library refuses a step count that would make 2^32 elements or more, or need more than the machine's
 // memory, as "subdivision: 18 steps would need about 73 GB, more than the 25 GB of memory here (steps)
 // (element 18)": the parameter's name and InvalidInput's element index speak to its callers, and the user
-// read "(steps) (element 18)". Returns that refusal in the command's words; nothing for any other error.
-std::optional<std::string> steps_refusal(const InvalidInput& e) {
+// read "(steps) (element 18)". Returns that refusal in the command's words, advising to lower
+// `count_option`; nothing for any other error.
+std::optional<std::string> steps_refusal(const InvalidInput& e, const char* count_option) {
   if (e.element() == InvalidInput::kNoElement) return std::nullopt;
   const std::string r = e.what();
   const std::string head = "subdivision: ", tail = " (steps) (element " + std::to_string(e.element()) + ")";
   if (r.size() < head.size() + tail.size() || r.compare(0, head.size(), head) != 0 ||
       r.compare(r.size() - tail.size(), tail.size(), tail) != 0)
     return std::nullopt;
-  return "subdiv: " + r.substr(head.size(), r.size() - head.size() - tail.size()) + ": lower --levels (or --steps)";
+  return "subdiv: " + r.substr(head.size(), r.size() - head.size() - tail.size()) + ": lower " + count_option;
 }
 
 // The library's step-count refusal in the command's words; other errors as they are.
 template <class Fn>
-auto refusing_steps(Fn&& fn) {
+auto refusing_steps(const char* count_option, Fn&& fn) {
   try {
     return fn();
   } catch (const InvalidInput& e) {
-    if (const std::optional<std::string> r = steps_refusal(e)) throw InvalidInput(*r);
+    if (const std::optional<std::string> r = steps_refusal(e, count_option)) throw InvalidInput(*r);
     throw;
   }
 }
 
 // Errors of the library name a vertex or face; say which mesh they are in. (what() already ends with the
-// element, so the new error does not repeat it.) A refused step count is not the mesh's fault: said alone.
+// element, so the new error does not repeat it.) A refused step count is not the mesh's fault: it passes
+// unchanged, for refusing_steps around this call to say.
 template <class Fn>
 auto about(const std::string& what, Fn&& fn) {
   try {
     return fn();
   } catch (const InvalidInput& e) {
-    if (const std::optional<std::string> r = steps_refusal(e)) throw InvalidInput(*r);
+    if (steps_refusal(e, "")) throw;
     throw InvalidInput(what + ": " + e.what());
   }
 }
@@ -267,19 +273,22 @@ std::string count(std::uint64_t n) { return n == kSaturated ? std::string("more 
 // --adaptive keeps every level, about 300 bytes per uniform triangle, hence a limit 8 times lower.
 constexpr std::uint64_t kAdaptiveLimitDivisor = 8;
 
-void check_size(const Size& size, const SchemeInfo& s, int steps, std::uint64_t max_triangles, bool adaptive = false) {
+// `count_option` is the option the step count came from (count_option(SubdivArgs)), which the advice names.
+void check_size(const Size& size, const SchemeInfo& s, int steps, std::uint64_t max_triangles, const char* count_option,
+                bool adaptive = false) {
   const std::uint64_t limit = adaptive ? max_triangles / kAdaptiveLimitDivisor : max_triangles;
   if (size.triangles > limit || size.vertices > limit)
     throw InvalidInput("subdiv: " + std::string(s.name) + " with " + std::to_string(steps) + " steps would make " +
                        count(size.triangles) + " triangles, more than the limit " + std::to_string(limit) +
-                       (adaptive ? " (--max-triangles / 8 with --adaptive; lower --levels)" : " (--max-triangles; lower --levels)"));
+                       (adaptive ? " (--max-triangles / 8 with --adaptive; lower " : " (--max-triangles; lower ") +
+                       count_option + ")");
 }
 
-PolyMesh run_dual(const PolyMesh& base, const SchemeInfo& s, int steps, std::uint64_t max_triangles) {
+PolyMesh run_dual(const PolyMesh& base, const SchemeInfo& s, int steps, std::uint64_t max_triangles, const char* count_option) {
   const DualScheme d = s.scheme == Scheme::kZwartPowell ? DualScheme::kZwartPowell : DualScheme::kDooSabin;
   const DualMeshSize ds = dual_mesh_size(base, d, steps);
   const std::uint64_t tris = ds.corners == UINT64_MAX ? kSaturated : ds.corners - 2 * ds.faces;
-  check_size({ds.vertices, ds.faces, tris}, s, steps, max_triangles);
+  check_size({ds.vertices, ds.faces, tris}, s, steps, max_triangles, count_option);
   return subdivide_dual(base, d, steps);
 }
 
@@ -291,20 +300,21 @@ struct Result {
   double ms = 0.0;
 };
 
-Result run_uniform(const PolyMesh& base, const SchemeInfo& s, int steps, std::uint64_t max_triangles, bool want_polygons) {
+Result run_uniform(const PolyMesh& base, const SchemeInfo& s, int steps, std::uint64_t max_triangles, const char* count_option,
+                   bool want_polygons) {
   Result r;
   if (s.dual) {
     Stopwatch watch;
-    PolyMesh m = run_dual(base, s, steps, max_triangles);
+    PolyMesh m = run_dual(base, s, steps, max_triangles, count_option);
     r.ms = watch.ms();
     r.triangles = triangulate(m);
     r.num_polygons = m.num_faces();
     if (want_polygons) r.polygons = std::move(m);
     return r;
   }
-  check_size(primal_size(base, steps), s, steps, max_triangles);
+  check_size(primal_size(base, steps), s, steps, max_triangles, count_option);
   Stopwatch watch;
-  const SubdivMesh m = refusing_steps([&] { return subdivide(base, primal(s.scheme), steps); });
+  const SubdivMesh m = refusing_steps(count_option, [&] { return subdivide(base, primal(s.scheme), steps); });
   r.ms = watch.ms();
   r.triangles = m.to_tri_mesh();
   r.num_polygons = m.half_step() ? m.topo.num_edges() : m.topo.num_faces;
@@ -450,7 +460,7 @@ int run_figure(const SubdivArgs& a) {
     const SchemeInfo& s = scheme_info(*c.scheme);
     const int steps = steps_for(s, a);
     std::string unused;
-    const Result r = run_uniform(base_for(in, s.scheme, &unused), s, steps, a.max_triangles, true);
+    const Result r = run_uniform(base_for(in, s.scheme, &unused), s, steps, a.max_triangles, count_option(a), true);
     add("%-14s %6d %10zu %10zu %10zu %9.2f\n", s.name, steps, r.triangles.num_vertices(), r.num_polygons,
         r.triangles.num_faces(), r.ms);
     images.push_back(render_polygons(r.polygons, cam, kW, kH));
@@ -533,10 +543,12 @@ int run_subdiv(const SubdivArgs& a) {
   TriMesh out;
   PolyMesh picture;  // uniform runs: the polygons, drawn with their edges
   if (a.adaptive) {
-    check_size(primal_size(base, steps), s, steps, a.max_triangles, true);
+    check_size(primal_size(base, steps), s, steps, a.max_triangles, count_option(a), true);
     SubdivMtInfo info;
     Stopwatch build_watch;
-    const Mt mt = about(in.name, [&] { return build_subdivision_mt(base, primal(s.scheme), steps, &info); });
+    const Mt mt = refusing_steps(count_option(a), [&] {
+      return about(in.name, [&] { return build_subdivision_mt(base, primal(s.scheme), steps, &info); });
+    });
     const double build_ms = build_watch.ms();
     Query q;
     q.criterion = *criterion;
@@ -551,7 +563,7 @@ int run_subdiv(const SubdivArgs& a) {
                   s.title, steps, mt.num_nodes(), build_ms, out.num_vertices(), out.num_faces(), info.uniform_faces,
                   st.refined, ms);
   } else {
-    Result r = run_uniform(base, s, steps, a.max_triangles, !a.png.empty());
+    Result r = run_uniform(base, s, steps, a.max_triangles, count_option(a), !a.png.empty());
     out = std::move(r.triangles);
     picture = std::move(r.polygons);
     std::snprintf(line, sizeof line, "%s, %d %s: %zu vertices, %zu faces -> %zu vertices, %zu polygons, %zu triangles in %.2f ms",
