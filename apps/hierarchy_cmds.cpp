@@ -141,6 +141,27 @@ void add_pm_query_options(CLI::App& sub, PmQueryArgs& a) {
 
 namespace {
 
+// The builder refuses a tolerance it cannot meet in terms of its own parameters (max_level, max_faces) and
+// a face id; restated here in the options the user typed.
+template <class Build>
+AdaptiveHierarchy restate_adaptive_refusal(const AdaptiveOptions& o, bool levels_given, Build&& build) {
+  try {
+    return build();
+  } catch (const InvalidInput& e) {
+    const std::string what = e.what();
+    char tol[32];
+    std::snprintf(tol, sizeof tol, "%g", static_cast<double>(o.tolerance));
+    if (what.find("not met at max_level") != std::string::npos)
+      throw InvalidInput("build --method adaptive: --tolerance " + std::string(tol) + " is not met within " +
+                         std::to_string(o.max_level) + " levels" + (levels_given ? "" : " (the default --levels)") +
+                         ": raise --levels (at most 48) or --tolerance, or check that the surface is continuous");
+    if (what.find("max_faces") != std::string::npos)
+      throw InvalidInput("build --method adaptive: --tolerance " + std::string(tol) + " needs more than " +
+                         std::to_string(o.max_faces) + " faces: raise --tolerance");
+    throw;
+  }
+}
+
 AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   AdaptiveOptions o;
   o.tolerance = a.tolerance;  // <= 0: not given (the option itself refuses values <= 0)
@@ -153,11 +174,11 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   if (a.input == "torus" || a.input == "saddle") {
     const ParametricSurface s = a.input == "torus" ? torus_parametric() : saddle_parametric();
     if (o.tolerance <= 0.0f) o.tolerance = a.input == "torus" ? 0.0685f : 0.002f;
-    return build_adaptive_parametric(s, o);
+    return restate_adaptive_refusal(o, a.levels >= 0, [&] { return build_adaptive_parametric(s, o); });
   }
   if (a.input == "implicit-torus") {
     if (o.tolerance <= 0.0f) o.tolerance = 0.046f;
-    return build_adaptive_implicit(torus_implicit(), o);
+    return restate_adaptive_refusal(o, a.levels >= 0, [&] { return build_adaptive_implicit(torus_implicit(), o); });
   }
   if (is_mesh_file(a.input)) throw InvalidInput("build --method adaptive: give a height field or torus | saddle | implicit-torus, not a mesh");
   // Checked here (named: the file, its size, its span), not left to the builder: a span past float's reach
@@ -167,7 +188,7 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
     const auto [lo, hi] = std::minmax_element(field.z.begin(), field.z.end());
     o.tolerance = std::max(1e-6f, 0.01f * (*hi - *lo));
   }
-  return build_adaptive_heightfield(field, o);
+  return restate_adaptive_refusal(o, a.levels >= 0, [&] { return build_adaptive_heightfield(field, o); });
 }
 
 void print_metrics(const Mt& mt, bool semiregular = false) {
