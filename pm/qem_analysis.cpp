@@ -140,11 +140,11 @@ class LtConstraints {
   int n_ = 0;
 };
 
-// What a Lindstrom-Turk placement reads of the faces around an edge, as sums that can be added, taken back and
+// What a Lindstrom-Turk placement reads of the faces around an edge, as sums that can be added and
 // moved to another origin in O(1): per face plane (n, d) with d = n.c0 - n.o in coordinates centred on o, the
 // volume terms sum n, sum d, sum d^2, sum d n and sum n n^T; per border edge p -> q (e = q - p, pq = p x q),
 // sum e, sum pq, sum e x pq, sum |pq|^2 and sum (|e|^2 I - e e^T); per neighbour w, sum (w - o) and their
-// count. Every face or border edge is weighted by `s` (+1, or -1 to take one back).
+// count.
 struct LtMoments {
   glm::dvec3 n{0.0}, c{0.0}, h0{0.0}, h1{0.0}, h2{0.0};
   double d = 0.0, k = 0.0;
@@ -153,23 +153,23 @@ struct LtMoments {
   glm::dvec3 nbr{0.0};
   double nbrs = 0.0;
 
-  void plane(const glm::dvec3& nn, double dd, double s) noexcept {
-    n += s * nn, d += s * dd, k += s * (dd * dd);
-    h0 += (s * nn.x) * nn, h1 += (s * nn.y) * nn, h2 += (s * nn.z) * nn, c += (s * dd) * nn;
+  void plane(const glm::dvec3& nn, double dd) noexcept {
+    n += nn, d += dd, k += dd * dd;
+    h0 += nn.x * nn, h1 += nn.y * nn, h2 += nn.z * nn, c += dd * nn;
   }
-  void border(const glm::dvec3& p, const glm::dvec3& q, double s) noexcept {
+  void border(const glm::dvec3& p, const glm::dvec3& q) noexcept {
     const glm::dvec3 e = q - p, pq = glm::cross(p, q);
     // |e x x + pq|^2 = x^T (|e|^2 I - e e^T) x - 2 (e x pq).x + |pq|^2
     const double ee = glm::dot(e, e);
-    e1 += s * e, e2 += s * pq;
-    g0 += s * (glm::dvec3(ee, 0, 0) - e.x * e);
-    g1 += s * (glm::dvec3(0, ee, 0) - e.y * e);
-    g2 += s * (glm::dvec3(0, 0, ee) - e.z * e);
-    cb += s * glm::cross(e, pq);
-    kb += s * glm::dot(pq, pq);
-    borders += s;
+    e1 += e, e2 += pq;
+    g0 += glm::dvec3(ee, 0, 0) - e.x * e;
+    g1 += glm::dvec3(0, ee, 0) - e.y * e;
+    g2 += glm::dvec3(0, 0, ee) - e.z * e;
+    cb += glm::cross(e, pq);
+    kb += glm::dot(pq, pq);
+    borders += 1.0;
   }
-  void neighbour(const glm::dvec3& w, double s) noexcept { nbr += s * w, nbrs += s; }
+  void neighbour(const glm::dvec3& w) noexcept { nbr += w, nbrs += 1.0; }
   LtMoments& operator+=(const LtMoments& m) noexcept {
     n += m.n, c += m.c, h0 += m.h0, h1 += m.h1, h2 += m.h2, d += m.d, k += m.k;
     e1 += m.e1, e2 += m.e2, cb += m.cb, g0 += m.g0, g1 += m.g1, g2 += m.g2, kb += m.kb, borders += m.borders;
@@ -608,7 +608,7 @@ LtMoments Analysis::lt_moments_about(Index v, const glm::dvec3& o, bool with_nei
     if (c[0] == except || c[1] == except || c[2] == except) continue;
     const glm::dvec4& pl = fplane_[fb[i]];
     const glm::dvec3 n(pl);
-    m.plane(n, pl.w - glm::dot(n, o), 1.0);
+    m.plane(n, pl.w - glm::dot(n, o));
   }
   if (!border_[v] && !with_neighbours) return m;
   auto next_prev = [&](Index i) {
@@ -624,8 +624,8 @@ LtMoments Analysis::lt_moments_about(Index v, const glm::dvec3& o, bool with_nei
       return std::find(list.begin(), list.begin() + cnt, w) != list.begin() + cnt;
     };
     for (Index i = 0; i < cnt; ++i) {
-      if (nx[i] != except && !holds(pv_, nx[i])) m.border(pv, geo_[nx[i]].p - o, 1.0);
-      if (pv_[i] != except && !holds(nx, pv_[i])) m.border(geo_[pv_[i]].p - o, pv, 1.0);
+      if (nx[i] != except && !holds(pv_, nx[i])) m.border(pv, geo_[nx[i]].p - o);
+      if (pv_[i] != except && !holds(nx, pv_[i])) m.border(geo_[pv_[i]].p - o, pv);
     }
     return m;  // a vertex this small is never cached: no neighbours asked for
   }
@@ -639,17 +639,17 @@ LtMoments Analysis::lt_moments_about(Index v, const glm::dvec3& o, bool with_nei
     const std::uint32_t prevs = stamp();
     for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(i).second] = prevs;
     for (Index i = 0; i < cnt; ++i)
-      if (const Index w = next_prev(i).first; w != except && lt_mark_[w] != prevs) m.border(pv, geo_[w].p - o, 1.0);
+      if (const Index w = next_prev(i).first; w != except && lt_mark_[w] != prevs) m.border(pv, geo_[w].p - o);
     const std::uint32_t nexts = stamp();
     for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(i).first] = nexts;
     for (Index i = 0; i < cnt; ++i)
-      if (const Index w = next_prev(i).second; w != except && lt_mark_[w] != nexts) m.border(geo_[w].p - o, pv, 1.0);
+      if (const Index w = next_prev(i).second; w != except && lt_mark_[w] != nexts) m.border(geo_[w].p - o, pv);
   }
   if (with_neighbours) {
     const std::uint32_t seen = stamp();
     for (Index i = 0; i < cnt; ++i)
       for (const Index w : {next_prev(i).first, next_prev(i).second})
-        if (lt_mark_[w] != seen) lt_mark_[w] = seen, m.neighbour(geo_[w].p - o, 1.0);
+        if (lt_mark_[w] != seen) lt_mark_[w] = seen, m.neighbour(geo_[w].p - o);
   }
   return m;
 }
