@@ -324,6 +324,11 @@ class Analysis {
   Index ref_in_run_of(Index e, Index w) const { return epool_[epos_[e][0]].to != w ? epos_[e][0] : epos_[e][1]; }
   // A face's corner slot k at v.
   int corner_of(Index f, Index v) const { return cur_[3 * f] == v ? 0 : (cur_[3 * f + 1] == v ? 1 : 2); }
+  // Face f at v holds the directed edges v -> next and prev -> v: {next, prev}.
+  std::pair<Index, Index> next_prev(Index f, Index v) const {
+    const int k = corner_of(f, v);
+    return {cur_[3 * f + (k + 1) % 3], cur_[3 * f + (k + 2) % 3]};
+  }
   std::uint64_t tie_key(const Edge& e) const { return (std::uint64_t{node_of_[e.a]} << 32) | node_of_[e.b]; }
 
   Placement place(Index a, Index b) const;
@@ -611,15 +616,10 @@ LtMoments Analysis::lt_moments_about(Index v, const glm::dvec3& o, bool with_nei
     m.plane(n, pl.w - glm::dot(n, o));
   }
   if (!border_[v] && !with_neighbours) return m;
-  auto next_prev = [&](Index i) {
-    const Index* c = &cur_[3 * fb[i]];
-    const int k = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
-    return std::pair{c[(k + 1) % 3], c[(k + 2) % 3]};
-  };
   const glm::dvec3 pv = geo_[v].p - o;
   if (cnt <= kHubFaces) {
     std::array<Index, kHubFaces> nx, pv_;
-    for (Index i = 0; i < cnt; ++i) std::tie(nx[i], pv_[i]) = next_prev(i);
+    for (Index i = 0; i < cnt; ++i) std::tie(nx[i], pv_[i]) = next_prev(fb[i], v);
     auto holds = [&](const std::array<Index, kHubFaces>& list, Index w) {
       return std::find(list.begin(), list.begin() + cnt, w) != list.begin() + cnt;
     };
@@ -637,18 +637,18 @@ LtMoments Analysis::lt_moments_about(Index v, const glm::dvec3& o, bool with_nei
   };
   if (border_[v]) {
     const std::uint32_t prevs = stamp();
-    for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(i).second] = prevs;
+    for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(fb[i], v).second] = prevs;
     for (Index i = 0; i < cnt; ++i)
-      if (const Index w = next_prev(i).first; w != except && lt_mark_[w] != prevs) m.border(pv, geo_[w].p - o);
+      if (const Index w = next_prev(fb[i], v).first; w != except && lt_mark_[w] != prevs) m.border(pv, geo_[w].p - o);
     const std::uint32_t nexts = stamp();
-    for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(i).first] = nexts;
+    for (Index i = 0; i < cnt; ++i) lt_mark_[next_prev(fb[i], v).first] = nexts;
     for (Index i = 0; i < cnt; ++i)
-      if (const Index w = next_prev(i).second; w != except && lt_mark_[w] != nexts) m.border(geo_[w].p - o, pv);
+      if (const Index w = next_prev(fb[i], v).second; w != except && lt_mark_[w] != nexts) m.border(geo_[w].p - o, pv);
   }
   if (with_neighbours) {
     const std::uint32_t seen = stamp();
     for (Index i = 0; i < cnt; ++i)
-      for (const Index w : {next_prev(i).first, next_prev(i).second})
+      for (const auto [next, prev] = next_prev(fb[i], v); const Index w : {next, prev})
         if (lt_mark_[w] != seen) lt_mark_[w] = seen, m.neighbour(geo_[w].p - o);
   }
   return m;
@@ -923,17 +923,14 @@ double Analysis::border_deviation(Index a, Index b, const glm::dvec3& p) const {
   for (Index v : {a, b}) {
     if (!border_[v]) continue;
     for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
-      const Index* c = &cur_[3 * *it];
-      const int k = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
-      const Index next = c[(k + 1) % 3], prev = c[(k + 2) % 3];
+      const auto [next, prev] = next_prev(*it, v);
       // v -> next is a border edge when no face of v holds next -> v (next before v), and prev -> v when none
       // holds v -> prev.
       bool next_twin = false, prev_twin = false;
       for (const Index* jt = faces_begin(v); jt != faces_end(v); ++jt) {
-        const Index* d = &cur_[3 * *jt];
-        const int j = d[0] == v ? 0 : (d[1] == v ? 1 : 2);
-        next_twin |= d[(j + 2) % 3] == next;
-        prev_twin |= d[(j + 1) % 3] == prev;
+        const auto [jnext, jprev] = next_prev(*jt, v);
+        next_twin |= jprev == next;
+        prev_twin |= jnext == prev;
       }
       for (const auto& [w, twin] : {std::pair{next, next_twin}, std::pair{prev, prev_twin}}) {
         if (twin || n_old == old_to.size()) continue;
@@ -1306,10 +1303,7 @@ void Analysis::border_quadric(Index v, const Index* faces, Index count, Index* a
   };
   const std::span<Index> after(after_buf, count), before(before_buf, count);
   for (Index i = 0; i < count; ++i) {
-    const Index* c = &cur_[3 * faces[i]];
-    const int j = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
-    after[i] = c[(j + 1) % 3];
-    before[i] = c[(j + 2) % 3];
+    std::tie(after[i], before[i]) = next_prev(faces[i], v);
   }
   // An open fan has an edge leaving v with no twin: a corner after v that is before v in no face.
   ++stamp_;
