@@ -357,6 +357,11 @@ class Analysis {
   // Slot e becomes candidate (a, b) with its cost; in the queue unless `queue` is false (it stays out).
   void set_edge(Index e, Index a, Index b, bool queue = true);
   void reinsert_edges_of(Index v);
+  // The hubs' lists of edges outside the queue (out_of_).
+  bool edge_at(Index e, Index w) const;  // e is a live edge at w
+  void note_out(Index e);                // e left the queue for good (until re-examined)
+  void list_out_edges(Index v);          // v's list, from its edges
+  void init_out_lists();
   std::size_t switch_to_lt();  // returns the number of edges costed
   // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
   // rather than __builtin_prefetch. On the machine measured (a VM) the prefetches gained little; the same
@@ -379,6 +384,7 @@ class Analysis {
   void touch_faces(Index a, Index b) const {
     for (Index v : {a, b}) {
       touch(raw_.bounds[node_of_[v]].radius);
+      if (fadj_[v].cnt > kOrderedRun) continue;  // a hub: the edge may well be refused before its faces are read
       for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
         touch(cur_[3 * *it]);
         touch(fnormal_[*it].x);
@@ -411,7 +417,20 @@ class Analysis {
     while (uf_[x] != x) x = uf_[x] = uf_[uf_[x]];
     return x;
   }
+  // The verdicts on a collapse (a, b): check_links() those of the connectivity (lock, depth, faces on the
+  // edge, link condition), which fills st's faces and apexes; check() then those of vs at p.
+  Verdict check_links(Index a, Index b, Step& st);
   Verdict check(Index a, Index b, const glm::dvec3& p, Step& st);
+  Verdict hub_precheck(Index a, Index b, const glm::dvec3& p, const Step& st) const;
+  Verdict check_all(Index a, Index b, const glm::dvec3& p, Step& st);  // check() without hub_precheck()
+  // The new normal of face f with corner `moved` at p, and whether that turns f over or to zero area.
+  bool turns_over(Index f, Index moved, const glm::dvec3& p, glm::dvec3& n1) const {
+    n1 = face_normal(f, moved, p);
+    const glm::dvec3& n0 = fnormal_[f];
+    const double l1 = glm::dot(n1, n1);
+    if (n0 == glm::dvec3(0.0)) return l1 == 0.0;
+    return !(glm::dot(n0, n1) > 1e-3 * std::sqrt(l1));
+  }
   double border_deviation(Index a, Index b, const glm::dvec3& p) const;
   void collapse(Index a, Index b, const Placement& pl, const Step& st);
   void init_state();  // the per-slot and per-face arrays for nl_ slots and nf_ faces, all alive
@@ -479,8 +498,20 @@ class Analysis {
   std::vector<EdgeRef> new_edges_;
   std::vector<glm::dvec3> new_normal_;  // scratch of check() for collapse()
   std::vector<Index> new_fan_;          // scratch of check(): the faces of a and b that stay
+  Index flip_hint_ = kInvalid;          // the face that turned over at check()'s last refusal around a hub
   std::vector<std::uint8_t> stale_;     // per edge, Lindstrom-Turk only: costed before its neighbourhood changed
-  std::vector<std::uint8_t> link_refused_;  // per edge: its last verdict was the link condition's
+  // Per edge: its last verdict was the link condition's (kHeldLink) or a face turned over (kHeldFlip).
+  std::vector<std::uint8_t> link_refused_;
+  static constexpr std::uint8_t kHeldLink = 1, kHeldFlip = 2;
+  // A vertex of more than kHubFaces candidate edges (a hub) keeps a list of its edges outside the queue (a
+  // superset: entries are checked when read, duplicates dropped through out_stamp_), so that a collapse
+  // next to it re-examines those instead of all its edges: a hub that is an apex of every collapse around
+  // it (a cone of slivers) was scanned whole at each. out_of_: per slot, its entry of outs_ or kInvalid.
+  std::vector<Index> out_of_;
+  std::vector<std::vector<Index>> outs_;
+  std::vector<Index> free_outs_;
+  std::vector<std::uint32_t> out_stamp_;  // per edge
+  std::uint32_t out_clock_ = 0;
   mutable std::vector<Index> hub_of_;   // per slot, Lindstrom-Turk only: its entry of hubs_, or kInvalid
   mutable std::vector<LtHub> hubs_;
   mutable std::vector<std::uint32_t> lt_mark_;  // per slot, stamps of lt_moments_about()
@@ -769,7 +800,43 @@ void Analysis::reinsert_edges_of(Index v) {
     if (!heap_.contains(e->edge)) heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
 }
 
-Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& st) {
+bool Analysis::edge_at(Index e, Index w) const {
+  const Edge& x = edges_[e];  // a dead edge keeps its ends, one of which is dead
+  return (x.a == w || x.b == w) && node_alive_[x.a] && node_alive_[x.b];
+}
+
+void Analysis::note_out(Index e) {
+  for (Index v : {edges_[e].a, edges_[e].b})
+    if (out_of_[v] != kInvalid) outs_[out_of_[v]].push_back(e);
+}
+
+void Analysis::list_out_edges(Index v) {
+  if (out_of_[v] == kInvalid) {
+    if (free_outs_.empty()) {
+      out_of_[v] = static_cast<Index>(outs_.size());
+      outs_.emplace_back();
+    } else {
+      out_of_[v] = free_outs_.back();
+      free_outs_.pop_back();
+    }
+  }
+  std::vector<Index>& list = outs_[out_of_[v]];
+  list.clear();
+  for (const EdgeRef* e = edges_begin(v); e != edges_end(v); ++e)
+    if (!heap_.contains(e->edge)) list.push_back(e->edge);
+}
+
+void Analysis::init_out_lists() {
+  out_of_.assign(node_alive_.size(), kInvalid);
+  outs_.clear();
+  free_outs_.clear();
+  out_stamp_.assign(edges_.size(), 0);
+  out_clock_ = 0;
+  for (std::size_t v = 0; v < node_alive_.size(); ++v)
+    if (node_alive_[v] && eadj_[v].cnt > kHubFaces) list_out_edges(static_cast<Index>(v));
+}
+
+Analysis::Verdict Analysis::check_links(Index a, Index b, Step& st) {
   if (locked_[a] || locked_[b]) return Verdict::kLocked;
   // The depth limit, and the bits of a node key: depth + 1 + the tree-id bits of the roots left at the end
   // (at most the vertices after this collapse) must fit in 64, or finish() refuses the whole hierarchy.
@@ -784,14 +851,15 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
   Index& fl = st.fl;
   Index& fr = st.fr;
   int shared = 0;
-  for (const Index* it = faces_begin(a); it != faces_end(a); ++it) {
-    const Index f = *it;
-    for (int k = 0; k < 3; ++k) {
-      if (cur_[3 * f + k] != b) continue;
-      ++shared;
-      const int ka = cur_[3 * f + (k + 1) % 3] == a ? (k + 1) % 3 : (k + 2) % 3;
-      if (cur_[3 * f + (ka + 1) % 3] == b) fl = f; else fr = f;
-    }
+  // The faces on the edge are in both runs: the shorter is read (a hub's edges are mostly to small vertices).
+  const Index fewer = fadj_[b].cnt < fadj_[a].cnt ? b : a;
+  const Index other = fewer == a ? b : a;
+  for (const Index* it = faces_begin(fewer); it != faces_end(fewer); ++it) {
+    const Index* c = &cur_[3 * *it];
+    if (c[0] != other && c[1] != other && c[2] != other) continue;
+    ++shared;
+    const int ka = c[0] == a ? 0 : c[1] == a ? 1 : 2;
+    if (c[(ka + 1) % 3] == b) fl = *it; else fr = *it;
   }
   if (shared == 0 || shared > 2) return Verdict::kLink;
   if (shared == 1 && border_[a] == 0) return Verdict::kLink;  // cannot happen on a manifold; be safe
@@ -805,15 +873,103 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
   if (fr != kInvalid) st.kr = apex_corner(fr), st.vr = cur_[3 * fr + st.kr];
   const Index vl = st.vl, vr = st.vr;
   // Link condition: common neighbours are exactly the apexes (the candidate edges are the neighbours).
-  ++stamp_;
-  for (const EdgeRef* e = edges_begin(a); e != edges_end(a); ++e) mark_[e->to] = stamp_;
-  for (const EdgeRef* e = edges_begin(b); e != edges_end(b); ++e) {
-    const Index w = e->to;
-    if (w != a && w != vl && w != vr && mark_[w] == stamp_) return Verdict::kLink;
+  // Next to a hub, the small end's neighbours are looked up in their own (short) runs instead of marking
+  // the hub's.
+  bool looked_up = false;
+  const Index small = eadj_[a].cnt <= eadj_[b].cnt ? a : b, big = small == a ? b : a;
+  if (eadj_[big].cnt > kOrderedRun) {
+    looked_up = true;
+    for (const EdgeRef* e = edges_begin(small); e != edges_end(small) && looked_up; ++e) {
+      const Index w = e->to;
+      if (w == big || w == vl || w == vr) continue;
+      if (eadj_[w].cnt > kOrderedRun) {
+        looked_up = false;  // another hub: marks below
+        break;
+      }
+      for (const EdgeRef* x = edges_begin(w); x != edges_end(w); ++x)
+        if (x->to == big) return Verdict::kLink;
+    }
+  }
+#if VARMESH_ENABLE_ASSERTS
+  const bool cross_check = true;
+#else
+  const bool cross_check = false;
+#endif
+  if (!looked_up || cross_check) {
+    ++stamp_;
+    for (const EdgeRef* e = edges_begin(a); e != edges_end(a); ++e) mark_[e->to] = stamp_;
+    for (const EdgeRef* e = edges_begin(b); e != edges_end(b); ++e) {
+      const Index w = e->to;
+      if (w != a && w != vl && w != vr && mark_[w] == stamp_) {
+        VARMESH_ASSERT(!looked_up);  // the lookups found no common neighbour either
+        return Verdict::kLink;
+      }
+    }
   }
   // An apex must keep a face, and faces (a|b, vl, vr) would become duplicates (the tetrahedron case).
   for (Index x : {vl, vr})
     if (x != kInvalid && fadj_[x].cnt <= 1) return Verdict::kLink;
+  return Verdict::kOk;
+}
+
+// A hub (a vertex of more than kOrderedRun faces) moved to p by a collapse: the faces that turn over are
+// tried first where they are likely, in O(1) or O(the small end's second ring) instead of O(the hub's
+// faces): the face that turned over at the last refusal around a hub (a pole among slivers whose float
+// corners make a ragged ring: moved towards any of them, it turns the same ones over), then the faces next
+// to the small end (a pole moved onto its ring). kOk when none turns over (check() then reads every face);
+// otherwise the verdict check() would give: kFlip, or kLink for the tetrahedron case, which comes first.
+Analysis::Verdict Analysis::hub_precheck(Index a, Index b, const glm::dvec3& p, const Step& st) const {
+  if (std::max(fadj_[a].cnt, fadj_[b].cnt) <= kOrderedRun) return Verdict::kOk;
+  bool flipped = false;
+  glm::dvec3 n1;
+  if (const Index f = flip_hint_; f != kInvalid && alive_[f] && f != st.fl && f != st.fr) {
+    const Index* c = &cur_[3 * f];
+    const Index moved = c[0] == a || c[1] == a || c[2] == a ? a : c[0] == b || c[1] == b || c[2] == b ? b : kInvalid;
+    flipped = moved != kInvalid && turns_over(f, moved, p, n1);
+  }
+  for (int side = 0; side < 2 && !flipped; ++side) {
+    const Index h = side == 0 ? a : b, s = side == 0 ? b : a;
+    if (fadj_[h].cnt <= kOrderedRun || fadj_[s].cnt > kOrderedRun || p == geo_[h].p) continue;
+    for (const Index* it = faces_begin(s); it != faces_end(s) && !flipped; ++it)
+      if (*it != st.fl && *it != st.fr) flipped = turns_over(*it, s, p, n1);
+    for (const EdgeRef* e = edges_begin(s); e != edges_end(s) && !flipped; ++e) {
+      if (e->to == h || fadj_[e->to].cnt > kOrderedRun) continue;
+      for (const Index* it = faces_begin(e->to); it != faces_end(e->to) && !flipped; ++it) {
+        const Index f = *it;
+        if (f != st.fl && f != st.fr && (cur_[3 * f] == h || cur_[3 * f + 1] == h || cur_[3 * f + 2] == h))
+          flipped = turns_over(f, h, p, n1);
+      }
+    }
+  }
+  if (!flipped) return Verdict::kOk;
+  if (st.vl == kInvalid || st.vr == kInvalid) return Verdict::kFlip;
+  // The tetrahedron case: faces (a, vl, vr) and (b, vl, vr), found among the faces of a small apex.
+  const Index by = fadj_[st.vl].cnt <= kOrderedRun ? st.vl : fadj_[st.vr].cnt <= kOrderedRun ? st.vr : kInvalid;
+  if (by == kInvalid) return Verdict::kOk;
+  bool with[2] = {false, false};
+  for (const Index* it = faces_begin(by); it != faces_end(by); ++it) {
+    const Index* c = &cur_[3 * *it];
+    auto has = [&](Index v) { return c[0] == v || c[1] == v || c[2] == v; };
+    if (has(st.vl) && has(st.vr)) {
+      with[0] |= has(a);
+      with[1] |= has(b);
+    }
+  }
+  return with[0] && with[1] ? Verdict::kLink : Verdict::kFlip;
+}
+
+Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& st) {
+  if (const Verdict early = hub_precheck(a, b, p, st); early != Verdict::kOk) {
+    VARMESH_ASSERT(check_all(a, b, p, st) == early);  // the pass over every face agrees
+    return early;
+  }
+  return check_all(a, b, p, st);
+}
+
+Analysis::Verdict Analysis::check_all(Index a, Index b, const glm::dvec3& p, Step& st) {
+  const Index vl = st.vl, vr = st.vr, fl = st.fl, fr = st.fr;
+  st.fn = {kInvalid, kInvalid, kInvalid, kInvalid};
+  st.local = st.fine = 0.0;
   // One pass over the faces of a and b for the rest (a rejection is rare, so the pass runs to its end and
   // the verdicts keep their order of precedence):
   // - the tetrahedron case: faces (a, vl, vr) and (b, vr, vl) would both become (vs, vl, vr);
@@ -844,19 +1000,14 @@ Analysis::Verdict Analysis::check(Index a, Index b, const glm::dvec3& p, Step& s
       }
       if (hit == 2 && vl != kInvalid && vr != kInvalid) apexes[side] = true;
       if (f == fl || f == fr || flipped) continue;
-      const glm::dvec3& n0 = fnormal_[f];
-      const glm::dvec3 n1 = face_normal(f, v, p);
+      glm::dvec3 n1;
+      flipped = turns_over(f, v, p, n1);
       new_fan_.push_back(f);
       new_normal_.push_back(n1);
-      const double l1 = glm::dot(n1, n1);
-      if (n0 == glm::dvec3(0.0)) {
-        flipped = l1 == 0.0;
-        continue;
-      }
-      flipped = !(glm::dot(n0, n1) > 1e-3 * std::sqrt(l1));
     }
   }
   if (apexes[0] && apexes[1]) return Verdict::kLink;
+  if (flipped && std::max(fadj_[a].cnt, fadj_[b].cnt) > kOrderedRun) flip_hint_ = new_fan_.back();
   if (flipped) return Verdict::kFlip;
   // The other way round: how far a and b themselves end up from the new fan around vs (the planes above
   // see vs move, not the old vertices left behind; closed meshes gave up to 3x E in pm query --measure
@@ -1095,7 +1246,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
         // An edge (a, w) refused by the link condition, w no neighbour of b, is refused as (vs, w): its faces
         // are the same, and the common neighbours of w and vs hold those of w and a. It stays out of the
         // queue (a hub absorbing its neighbours one by one would try each of its edges again each time).
-        const bool held = link_refused_[e] && w != vl && w != vr && !heap_.contains(e);
+        const bool held = link_refused_[e] == kHeldLink && w != vl && w != vr && !heap_.contains(e);
         set_edge(e, vs, w, !held);
         if (held) rejected_[vs] = 1;
         epos_[e] = {at, static_cast<Index>(epool_.size() + new_edges_.size())};  // vs's run is appended below
@@ -1111,6 +1262,14 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     }
   eadj_[vs] = {static_cast<Index>(epool_.size()), static_cast<Index>(new_edges_.size())};
   epool_.insert(epool_.end(), new_edges_.begin(), new_edges_.end());
+  // vs's list of edges outside the queue, when a or b was a hub or vs is one: from its edges (the collapse
+  // is O(its degree) anyway). b's list goes back to the free ones.
+  if (out_of_[b] != kInvalid) {
+    outs_[out_of_[b]].clear();
+    free_outs_.push_back(out_of_[b]);
+    out_of_[b] = kInvalid;
+  }
+  if (out_of_[vs] != kInvalid || eadj_[vs].cnt > kHubFaces) list_out_edges(vs);
   // Lindstrom-Turk costs are memoryless: they read the faces around both ends, and those of every neighbour
   // of vs just changed. The edges at vs were re-costed above; the others at a neighbour are marked stale
   // and re-costed when they reach the top of the queue (run(): lazy evaluation), which costs one placement
@@ -1125,7 +1284,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   for (Index w : ring_) mark_[w] = stamp_;
   mark_[vs] = stamp_;
   auto link_holds = [&](Index w, const EdgeRef& e) {
-    return link_refused_[e.edge] && (mark_[e.to] != stamp_ || (e.to == vs && w != vl && w != vr));
+    return link_refused_[e.edge] == kHeldLink && (mark_[e.to] != stamp_ || (e.to == vs && w != vl && w != vr));
   };
   if (lt_) {
     for (Index w : ring_)
@@ -1155,9 +1314,58 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   raw_.records.push_back(rec);
 
   // Neighbours that had an edge rejected get their edges re-examined: their neighbourhood just changed.
+  // A hub's are those of its list: the same edges, all its edges outside the queue.
   for (Index w : ring_) {
     if (!rejected_[w]) continue;
     rejected_[w] = 0;
+    if (out_of_[w] != kInvalid) {
+      std::vector<Index>& list = outs_[out_of_[w]];
+#if VARMESH_ENABLE_ASSERTS
+      // Every edge of w outside the queue is in the list, or left it held: its other end, marked, tries it.
+      if (++out_clock_ == 0) {
+        std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
+        out_clock_ = 1;
+      }
+      for (const Index e : list) out_stamp_[e] = out_clock_;
+      auto listed_at = [&](Index v, Index e) {
+        return out_of_[v] != kInvalid && std::find(outs_[out_of_[v]].begin(), outs_[out_of_[v]].end(), e) != outs_[out_of_[v]].end();
+      };
+      for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
+        VARMESH_ASSERT(heap_.contains(e->edge) || out_stamp_[e->edge] == out_clock_ ||
+                       (rejected_[e->to] && (out_of_[e->to] == kInvalid || listed_at(e->to, e->edge))));
+#endif
+      if (++out_clock_ == 0) {  // wrapped: no stamp may look current
+        std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
+        out_clock_ = 1;
+      }
+      std::size_t keep = 0;
+      for (const Index e : list) {
+        if (out_stamp_[e] == out_clock_ || !edge_at(e, w) || heap_.contains(e)) continue;
+        out_stamp_[e] = out_clock_;
+        const EdgeRef ref{e, edges_[e].a == w ? edges_[e].b : edges_[e].a};
+        // Not exact, unlike the link condition's hold: an edge refused for a face turned over waits for a
+        // change around its other end (which then tries it again, rejected_ being set on both ends), not
+        // for any change around the hub. The faces that turn over are nearly always next to the small end
+        // (a pole moved onto its ring), and the hub is next to every collapse around it: each of its refused
+        // edges was tried again after each, each in O(its degree) (a cone over a disk of 100,000 slivers
+        // took minutes).
+        const bool flip_held = link_refused_[e] == kHeldFlip && mark_[ref.to] != stamp_;
+        if (flip_held || link_holds(w, ref)) {
+          // A held edge whose other end is no hub leaves the list: that end tries it again (it is marked
+          // rejected), when its own neighbourhood changes, which the verdict waits for.
+          if (out_of_[ref.to] == kInvalid) {
+            rejected_[ref.to] = 1;
+          } else {
+            rejected_[w] = 1;
+            list[keep++] = e;
+          }
+        } else {
+          heap_.push(e, edges_[e].cost, tie_key(edges_[e]));
+        }
+      }
+      list.resize(keep);
+      continue;
+    }
     for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e) {
       if (heap_.contains(e->edge)) continue;
       if (link_holds(w, *e)) rejected_[w] = 1;  // still out: tried again when x's neighbourhood changes
@@ -1863,6 +2071,7 @@ void Analysis::init_raw() {
 void Analysis::collapse_loop(QemStats& stats) {
   stale_.assign(lt_ ? edges_.size() : 0, 0);
   link_refused_.assign(edges_.size(), 0);
+  init_out_lists();
   const std::size_t target_v = opt_.target_vertices;
   const std::size_t target_f = opt_.target_faces;
   auto done = [&] {
@@ -1884,6 +2093,7 @@ void Analysis::collapse_loop(QemStats& stats) {
       stats.lt_finished = true;
       stats.lt_finish_from = stats.collapses;
       stats.lt_finish_edges = switch_to_lt();
+      init_out_lists();
     }
     if (heap_.empty()) {
       if (since_rebuild == 0) break;
@@ -1894,6 +2104,7 @@ void Analysis::collapse_loop(QemStats& stats) {
           rejected_[v] = 0;
           reinsert_edges_of(static_cast<Index>(v));
         }
+      init_out_lists();
       continue;
     }
     const Index e = heap_.top();
@@ -1927,8 +2138,10 @@ void Analysis::collapse_loop(QemStats& stats) {
     // moved point turns a face over or exceeds the error limit, the point of the plane nearest to the
     // minimiser, then the minimiser itself, get their chance: the constraint never costs a collapse that the
     // plain placement would make.
-    Verdict verdict = Verdict::kOk;
-    if (volume_ && pl.solved) {
+    // The connectivity's verdict first: it does not depend on where vs goes, and placing around a hub reads
+    // all its faces.
+    Verdict verdict = check_links(a, b, step);
+    if (verdict == Verdict::kOk && volume_ && pl.solved) {
       const glm::dvec3 unmoved = pl.p;
       for (int attempt = 0; attempt < 3; ++attempt) {
         const glm::dvec3 x = attempt == 2 ? unmoved : preserve_volume(a, b, unmoved, attempt == 1);
@@ -1937,7 +2150,7 @@ void Analysis::collapse_loop(QemStats& stats) {
         verdict = check(a, b, pl.p, step);
         if (verdict != Verdict::kFlip && !(verdict == Verdict::kOk && too_far())) break;
       }
-    } else {
+    } else if (verdict == Verdict::kOk) {
       verdict = check(a, b, pl.p, step);
       // Where LT's constraints are nearly dependent (long slivers around a hub: a fan of 10,000 faces) their
       // point can lie far off the edge and turn faces over; the edge's midpoint and ends, cheapest first, get
@@ -1985,7 +2198,8 @@ void Analysis::collapse_loop(QemStats& stats) {
         case Verdict::kOk: break;
       }
       if (verdict != Verdict::kLocked && verdict != Verdict::kDepth) rejected_[a] = rejected_[b] = 1;
-      link_refused_[e] = verdict == Verdict::kLink;
+      link_refused_[e] = verdict == Verdict::kLink ? kHeldLink : verdict == Verdict::kFlip ? kHeldFlip : 0;
+      note_out(e);
     }
     if (next != kInvalid) touch_runs(edges_[next].a, edges_[next].b);
   }
