@@ -6,8 +6,13 @@
 /// NaN/Inf coordinates, counts larger than the file can hold (checked before anything is allocated),
 /// unsupported properties or formats, meshes with no face ("no faces (empty mesh)"). Polygons are
 /// fan-triangulated: corners (c0, c1, c2, ..., ck) give (c0, c(i-1), c(i)) for i = 2..k. The result passes
-/// TriMesh::validate(). A UTF-8 byte-order mark at the start of an OBJ or OFF file is skipped. Writers write to a temporary file in the same folder and rename it over the
-/// target, so a failed write leaves no partial file.
+/// TriMesh::validate(). A UTF-8 byte-order mark at the start of an OBJ or OFF file is skipped. In text (OBJ,
+/// OFF, PLY headers and ascii PLY bodies) LF, CRLF and a lone CR (classic Mac OS) each end one line, also
+/// mixed in one file; line numbers count them so. A binary PLY body starts after the end_header line's line
+/// end (LF, CRLF or a lone CR; in a header with no LF at all, a CR LF after end_header is the lone CR line
+/// end followed by a body byte 10) and must end with the last element: data after it is refused, at its
+/// line (ascii) or byte offset with the number of extra bytes (binary). Writers write to a temporary file
+/// in the same folder and rename it over the target, so a failed write leaves no partial file.
 ///
 /// Supported:
 /// - OBJ: v (optionally with r g b colour in [0, 1] after xyz, on every v or on none; a 4th number w is

@@ -4,7 +4,6 @@
 // attributes per vertex. We keep the `v` statements as the vertices (so vertex ids match the file) and
 // give each vertex the vt/vn of the first corner that uses it; later corners that disagree are counted in
 // ReadInfo::attribute_conflicts rather than silently dropped or turned into split vertices.
-#include <algorithm>
 #include <charconv>
 #include <cstdint>
 #include <string>
@@ -242,14 +241,7 @@ class ObjParser {
 }  // namespace
 
 TriMesh read_obj(const std::string& path, std::string_view data, ReadInfo& info) {
-  // Classic Mac OS ended lines with a lone CR. The cursor takes CR for a blank (that is how CRLF lines
-  // work), so such a file read as one long line and failed on its second statement ("bad number 'v'"). A
-  // file with a CR and no LF anywhere can only be one of those: its CRs become line ends, on a copy.
-  if (data.find('\n') == std::string_view::npos && data.find('\r') != std::string_view::npos) {
-    std::string lines(data);
-    std::replace(lines.begin(), lines.end(), '\r', '\n');
-    return ObjParser(path, lines, info).run();
-  }
+  // read_mesh_data has turned lone CRs (classic Mac line ends) into LF, so lines end at LF here.
   return ObjParser(path, data, info).run();
 }
 

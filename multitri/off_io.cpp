@@ -61,6 +61,7 @@ glm::vec3 read_color(TextCursor& cur, std::string_view* toks, int n) {
 }  // namespace
 
 TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info) {
+  // read_mesh_data has turned lone CRs (classic Mac line ends) into LF, so lines end at LF here.
   TextCursor cur(data, path, '#');
   if (!cur.skip_empty_lines()) throw IoError(path, "empty file (expected an OFF header)", 1);
   const std::string_view header = cur.token();

@@ -620,6 +620,208 @@ TEST(MeshIoOff, VariantsColoursNormalsAndComments) {
   EXPECT_EQ(st.indices, (std::vector<Index>{2, 1, 0}));
 }
 
+// Line ends as text from different systems spells them: the LF text `lf` with its k-th LF spelled
+// kEnds[(k + start) % 6]. The order makes every kind follow every other kind somewhere. `lf` must have no
+// empty line: a CR line end followed by an LF one would be one CRLF.
+std::string mixed_line_ends(const std::string& lf, std::size_t start) {
+  static const char* const kEnds[6] = {"\r", "\n", "\r\n", "\r", "\r\n", "\n"};
+  std::string out;
+  std::size_t k = start;
+  for (char c : lf) {
+    if (c == '\n') out += kEnds[k++ % 6];
+    else out += c;
+  }
+  return out;
+}
+
+std::string lone_cr_line_ends(std::string lf) {
+  std::replace(lf.begin(), lf.end(), '\n', '\r');
+  return lf;
+}
+
+// The 1-based line of the first `needle` in the LF text `lf`.
+std::size_t line_of(const std::string& lf, const std::string& needle) {
+  const std::size_t at = lf.find(needle);
+  EXPECT_NE(at, std::string::npos) << needle;
+  return 1 + static_cast<std::size_t>(std::count(lf.begin(), lf.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+}
+
+// Writes `contents` to dir/name and returns the IoError that reading it must raise.
+IoError read_failure(const fs::path& dir, const std::string& name, const std::string& contents) {
+  write_text(dir / name, contents);
+  try {
+    read_mesh((dir / name).string());
+  } catch (const IoError& e) {
+    return e;
+  }
+  ADD_FAILURE() << name << " was accepted";
+  return IoError(name, "accepted");
+}
+
+// LF, CR and CRLF mixed in one OBJ (pieces pasted together on different systems): each is one line end,
+// for the statements and for the line numbers in errors.
+TEST(MeshIoObj, MixedLineEndsAreEachOneLineEnd) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_mixed_ends");
+  const std::string lf =
+      "# pasted together\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.5 0.25\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\n"
+      "g second # a comment ends at its line end too\nf 2 4 3\n";
+  write_text(dir / "lf.obj", lf);
+  const TriMesh expected = read_mesh((dir / "lf.obj").string());
+  ASSERT_EQ(expected.num_faces(), 2u);
+  ASSERT_TRUE(expected.has_texcoords());
+  const std::string bad = lf + "v 2 2 0\nf 1 2 x\nf 1 2 3\n";
+  for (std::size_t start = 0; start < 6; ++start) {
+    SCOPED_TRACE(start);
+    write_text(dir / "mixed.obj", mixed_line_ends(lf, start));
+    expect_identical(expected, read_mesh((dir / "mixed.obj").string()));
+    const IoError e = read_failure(dir, "bad.obj", mixed_line_ends(bad, start));
+    EXPECT_EQ(e.line(), line_of(bad, "f 1 2 x")) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad vertex index in face corner 'x'"), std::string::npos) << e.what();
+  }
+  // A CR before a CRLF (left by a second text-mode conversion) is a line end of its own: an empty line.
+  const IoError e = read_failure(dir, "crcrlf.obj", "v 0 0 0\r\r\nv 1 0 0\r\r\nv 0 1 0\r\r\nf 1 2 x\r\r\n");
+  EXPECT_EQ(e.line(), 7u) << e.what();
+}
+
+// OFF with lone CRs (classic Mac OS) or mixed line ends reads as with LF, header included, and errors name
+// the line counted the same way.
+TEST(MeshIoOff, LoneCrAndMixedLineEnds) {
+  const fs::path dir = testing::scratch_dir("mesh_io_off_line_ends");
+  const std::string lf = "COFF\n# four vertices\n4 2 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n1 1 0 1 2 3\n"
+                         "3 0 1 2\n3 1 3 2 # face colour follows\n";
+  write_text(dir / "lf.off", lf);
+  const TriMesh expected = read_mesh((dir / "lf.off").string());
+  ASSERT_EQ(expected.num_faces(), 2u);
+  ASSERT_TRUE(expected.has_colors());
+  const std::string bad = lf.substr(0, lf.find("3 1 3 2")) + "3 1 3 9\n";
+  std::vector<std::pair<std::string, std::string>> spellings = {{"cr", lone_cr_line_ends(lf)}};
+  for (std::size_t start = 0; start < 6; ++start) spellings.emplace_back("mixed" + std::to_string(start), mixed_line_ends(lf, start));
+  for (const auto& [name, text] : spellings) {
+    SCOPED_TRACE(name);
+    write_text(dir / (name + ".off"), text);
+    expect_identical(expected, read_mesh((dir / (name + ".off")).string()));
+  }
+  const std::string bad_spellings[] = {lone_cr_line_ends(bad), mixed_line_ends(bad, 0), mixed_line_ends(bad, 3)};
+  for (const std::string& text : bad_spellings) {
+    const IoError e = read_failure(dir, "bad.off", text);
+    EXPECT_EQ(e.line(), line_of(bad, "3 1 3 9")) << e.what();
+    EXPECT_NE(std::string(e.what()).find("vertex index 9 out of range"), std::string::npos) << e.what();
+  }
+}
+
+// An ascii PLY with lone CRs or mixed line ends, in the header and the body, reads as with LF; errors in
+// either name the line counted the same way.
+TEST(MeshIoPly, AsciiLoneCrAndMixedLineEnds) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_ascii_line_ends");
+  const std::string lf = all_types_ascii();
+  std::vector<std::pair<std::string, std::string>> spellings = {{"cr", lone_cr_line_ends(lf)}};
+  for (std::size_t start = 0; start < 6; ++start) spellings.emplace_back("mixed" + std::to_string(start), mixed_line_ends(lf, start));
+  std::string bad_header = lf, bad_body = lf;
+  bad_header.replace(bad_header.find("property short z"), 16, "property shorty z");
+  bad_body.replace(bad_body.find("1 3 3 2 1 1 0.5"), 15, "1 3 3 2 9 1 0.5");
+  for (const auto& [name, text] : spellings) {
+    SCOPED_TRACE(name);
+    write_text(dir / (name + ".ply"), text);
+    ReadInfo info;
+    expect_all_types_mesh(read_mesh((dir / (name + ".ply")).string(), &info), info);
+  }
+  const std::string bad_spellings[] = {"cr", "mixed0", "mixed1", "mixed2"};
+  for (const std::string& name : bad_spellings) {
+    SCOPED_TRACE(name);
+    auto spell = [&](const std::string& text) {
+      return name == "cr" ? lone_cr_line_ends(text) : mixed_line_ends(text, static_cast<std::size_t>(name.back() - '0'));
+    };
+    IoError e = read_failure(dir, "bad.ply", spell(bad_header));
+    EXPECT_EQ(e.line(), line_of(bad_header, "property shorty z")) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown property type 'shorty'"), std::string::npos) << e.what();
+    e = read_failure(dir, "bad.ply", spell(bad_body));
+    EXPECT_EQ(e.line(), line_of(bad_body, "1 3 3 2 9 1 0.5")) << e.what();
+    EXPECT_NE(std::string(e.what()).find("face 1: vertex index 9 out of range"), std::string::npos) << e.what();
+  }
+}
+
+// A binary PLY's header may use any line ends too, while its body is read byte for byte: CR and LF bytes
+// in the values stay what they are.
+TEST(MeshIoPly, BinaryHeaderLineEndsLeaveTheBodyAlone) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_binary_line_ends");
+  const std::string header =
+      "ply\nformat binary_little_endian 1.0\ncomment bytes 10 and 13 in the body\nelement vertex 3\n"
+      "property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+      "property uchar blue\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  // The body's first byte is `first` (the low byte of the first x); colours are CR and LF bytes.
+  auto body = [](std::uint8_t first) {
+    Bytes b(false);
+    b.put<std::uint32_t>(0x3f800000u | first).put(0.0f).put(0.0f).put<std::uint8_t>(13).put<std::uint8_t>(10).put<std::uint8_t>(13);
+    b.put(1.0f).put(0.0f).put(0.0f).put<std::uint8_t>(10).put<std::uint8_t>(13).put<std::uint8_t>(10);
+    b.put(0.0f).put(1.0f).put(0.0f).put<std::uint8_t>(13).put<std::uint8_t>(13).put<std::uint8_t>(10);
+    b.put<std::uint8_t>(3).put<std::int32_t>(0).put<std::int32_t>(1).put<std::int32_t>(2);
+    return b.str();
+  };
+  for (const std::uint8_t first : {std::uint8_t{10}, std::uint8_t{13}}) {
+    SCOPED_TRACE(static_cast<int>(first));
+    write_text(dir / "lf.ply", header + body(first));
+    const TriMesh expected = read_mesh((dir / "lf.ply").string());
+    ASSERT_EQ(bits(expected.positions[0].x), 0x3f800000u | first);
+    ASSERT_EQ(expected.colors[0], glm::vec3(13.0f, 10.0f, 13.0f) / 255.0f);
+    ASSERT_EQ(expected.colors[2], glm::vec3(13.0f, 13.0f, 10.0f) / 255.0f);
+    std::string crlf;
+    for (char c : header) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    // A header with lone CRs only: its end_header line ends at the CR, also when the body's first byte
+    // is an LF.
+    const std::pair<std::string, std::string> files[] = {{"crlf.ply", crlf}, {"cr.ply", lone_cr_line_ends(header)}};
+    for (const auto& [name, text] : files) {
+      SCOPED_TRACE(name);
+      write_text(dir / name, text + body(first));
+      expect_identical(expected, read_mesh((dir / name).string()));
+    }
+  }
+  // Mixed line ends with an LF somewhere: a lone CR after end_header ends the header when a CR byte
+  // follows it...
+  for (std::size_t start = 0; start < 6; ++start) {
+    SCOPED_TRACE(start);
+    write_text(dir / "lf.ply", header + body(13));
+    write_text(dir / "mixed.ply", mixed_line_ends(header, start) + body(13));
+    expect_identical(read_mesh((dir / "lf.ply").string()), read_mesh((dir / "mixed.ply").string()));
+  }
+  // ...but a CR and an LF byte after end_header are a CRLF in such a header, so a body that starts with
+  // an LF after a lone CR loses that byte, and the file is refused rather than misread.
+  std::string lf_then_cr = header;
+  lf_then_cr.back() = '\r';
+  const IoError e = read_failure(dir, "ambiguous.ply", lf_then_cr + body(10));
+  EXPECT_NE(e.byte_offset(), IoError::kNoOffset) << e.what();
+}
+
+// Bytes after the last element of a binary body are refused at their offset with their count, as data
+// after an ascii body's last element is refused at its line (AsciiBodyEndsWithTheLastElement).
+TEST(MeshIoPly, BinaryBodyEndsWithTheLastElement) {
+  const fs::path dir = testing::scratch_dir("mesh_io_ply_binary_trailing");
+  std::string written;
+  {
+    write_mesh((dir / "w.ply").string(), awkward_mesh(true, true, true));
+    std::ifstream in(dir / "w.ply", std::ios::binary);
+    written.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  // The writer's faces come last; all_types_binary ends with a skipped element of fixed size.
+  const std::pair<const char*, std::string> seeds[] = {{"written.ply", written},
+                                                       {"types.ply", all_types_binary(false)},
+                                                       {"types_be.ply", all_types_binary(true)}};
+  const std::string tails[] = {"\n", "\r\n", " ", std::string(3, '\0'), "junk after the faces"};
+  for (const auto& [name, good] : seeds) {
+    SCOPED_TRACE(name);
+    write_text(dir / name, good);
+    ASSERT_NO_THROW(read_mesh((dir / name).string()));
+    for (const std::string& tail : tails) {
+      const IoError e = read_failure(dir, "tail.ply", good + tail);
+      EXPECT_EQ(e.byte_offset(), good.size()) << e.what();
+      const std::string count = std::to_string(tail.size()) + (tail.size() == 1 ? " byte" : " bytes");
+      EXPECT_NE(std::string(e.what()).find("data after the last element declared in the header: " + count +
+                                           " after the last element"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(MeshIoWrite, MissingFolderThrowsAndCreatesNothing) {
   const fs::path dir = testing::scratch_dir("mesh_io_write_missing");
   const TriMesh mesh = awkward_mesh(true, true, true);
