@@ -453,21 +453,27 @@ TEST(Robustness, RenderSeesTheMeshFromAnyCamera) {
 
 // Found by a third review, a fuzzing pass (each failed before its fix).
 
-// Runs `varmesh <args>` with files limited to `blocks` blocks of 512 bytes (ulimit -f; SIGXFSZ ignored, so a
-// write past the limit fails with EFBIG as on a full disk).
-CmdResult run_with_file_limit(int blocks, const std::string& args, const fs::path& dir) {
-  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = "sh -c \"trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; " + VARMESH_EXE + " " + args +
-                          "\" >" + out.string() + " 2>" + err.string();
-  const int raw = std::system(cmd.c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, testing::slurp(out), testing::slurp(err)};
-}
+// What run_limited() holds one run of varmesh to, as a full disk, a small machine or an input that never
+// comes would.
+enum class Limit {
+  kFileBlocks,  // files of at most N blocks of 512 bytes (ulimit -f); SIGXFSZ is ignored, so a write past
+                // the limit fails with EFBIG as on a full disk
+  kMemoryKb,    // N kB of address space (ulimit -v)
+  kSeconds,     // N seconds under timeout(1): a command that waits forever ends with status 124 instead
+};
 
-// `varmesh <args>` under timeout(1): a command that waits forever ends with status 124 instead.
-CmdResult run_with_timeout(int seconds, const std::string& args, const fs::path& dir) {
+// Runs `varmesh <args>` under `limit` of `amount`, stdout and stderr captured in files of `dir`. The limit is
+// set in the shell that std::system starts for this one command, so the test process keeps its own.
+CmdResult run_limited(Limit limit, int amount, const std::string& args, const fs::path& dir) {
+  const std::string n = std::to_string(amount);
+  std::string cmd;
+  switch (limit) {
+    case Limit::kFileBlocks: cmd = "trap '' XFSZ; ulimit -f " + n + "; "; break;
+    case Limit::kMemoryKb: cmd = "ulimit -v " + n + "; "; break;
+    case Limit::kSeconds: cmd = "timeout " + n + " "; break;
+  }
   const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = "timeout " + std::to_string(seconds) + " " + VARMESH_EXE + " " + args + " >" + out.string() +
-                          " 2>" + err.string();
+  cmd += std::string(VARMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
   const int raw = std::system(cmd.c_str());
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, testing::slurp(out), testing::slurp(err)};
 }
@@ -871,7 +877,7 @@ TEST(Robustness, FailedWritesInStagedFoldersNameTheFinalPath) {
       {"subdiv cube --levels 1 --figure " + fig.string(), (fig / "cube_base.png").string() + ": write failed"},
   };
   for (const auto& c : cases) {
-    const CmdResult r = run_with_file_limit(4, c.args, dir);
+    const CmdResult r = run_limited(Limit::kFileBlocks, 4, c.args, dir);
     EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
     EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
     EXPECT_TRUE(contains(r.err, c.names)) << c.args << "\n" << r.err;
@@ -901,7 +907,7 @@ TEST(Robustness, SpecialFilesGivenAsInputsAreRefusedWithoutWaiting) {
       {"info " + (dir / "zero.obj").string(), (dir / "zero.obj").string() + ": cannot read: it is a character device"},
   };
   for (const auto& c : cases) {
-    const CmdResult r = run_with_timeout(60, c.args, dir);
+    const CmdResult r = run_limited(Limit::kSeconds, 60, c.args, dir);
     EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
     EXPECT_EQ(count_lines(r.err), 1) << c.args << "\n" << r.err;
     EXPECT_TRUE(contains(r.err, c.says)) << c.args << "\n" << r.err;
@@ -1042,11 +1048,9 @@ TEST(Robustness, OutOfMemoryIsSaid) {
 #else
   const auto dir = testing::scratch_dir("robust_out_of_memory");
   const fs::path out = dir / "demo";
-  const std::string cmd = "sh -c \"ulimit -v 80000; " + std::string(VARMESH_EXE) + " demo --quiet --size 2049 --out " +
-                          out.string() + "\" 2>" + (dir / "stderr.txt").string();
-  const int raw = std::system(cmd.c_str());
-  const std::string err = testing::slurp(dir / "stderr.txt");
-  EXPECT_EQ(WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, 1) << err;
+  const CmdResult r = run_limited(Limit::kMemoryKb, 80000, "demo --quiet --size 2049 --out " + out.string(), dir);
+  const std::string& err = r.err;
+  EXPECT_EQ(r.status, 1) << err;
   EXPECT_EQ(count_lines(err), 1) << err;
   // "out of memory while <step> (varmesh demo)" when the failure falls within one of the steps announced on
   // stderr (which one depends on the machine).
