@@ -51,28 +51,11 @@ using Clock = varmesh::bench::Clock;
 namespace {
 
 using bench::Lap;
+using bench::Laps;
+using bench::median;
 using bench::seconds_since;
 using bench::Stopwatch;
 using bench::process_cpu_seconds;
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
-  return v[std::min(i, v.size() - 1)];
-}
-
-struct Laps {
-  std::vector<double> wall, cpu;
-  void add(const Lap& l) {
-    wall.push_back(l.wall);
-    cpu.push_back(l.cpu);
-  }
-  double cpu_med() const { return quantile(cpu, 0.5); }
-  double wall_med() const { return quantile(wall, 0.5); }
-  double cpu_p95() const { return quantile(cpu, 0.95); }
-  double wall_p95() const { return quantile(wall, 0.95); }
-};
 
 std::string loadavg() {
   std::ifstream in("/proc/loadavg");
@@ -149,7 +132,8 @@ MtBreakdown mt_breakdown(const Mt& mt) {
 // ---------------------------------------------------------------- 1. build
 
 void print_lap_row(const char* what, const Laps& l, double faces) {
-  std::printf("| %s | %.3f | %.3f | %.2f |\n", what, l.cpu_med(), l.wall_med(), faces / l.cpu_med() * 1e-6);
+  const Lap m = l.med();
+  std::printf("| %s | %.3f | %.3f | %.2f |\n", what, m.cpu, m.wall, faces / m.cpu * 1e-6);
 }
 
 struct Built {
@@ -260,7 +244,7 @@ void bench_cow(const Options& o) {
               mm.depth);
   std::printf("| simplify4k | CPU s %.3f | wall s %.3f | %.3f M input faces / s (CPU) | Mt %.1f B / finest face "
               "(%zu B) |\n",
-              t.cpu_med(), t.wall_med(), double(cow.num_faces()) / t.cpu_med() * 1e-6, mm.bytes_per_face,
+              t.med().cpu, t.med().wall, double(cow.num_faces()) / t.med().cpu * 1e-6, mm.bytes_per_face,
               mm.memory_bytes);
 }
 
@@ -287,7 +271,7 @@ void bench_extract(const Options& o, const Mt& mt, std::size_t finest) {
     MtFront f(mt);
     t_ctor.add(sw.lap());
   }
-  std::printf("  MtFront construction: %.2f ms CPU (%.2f wall)\n", 1e3 * t_ctor.cpu_med(), 1e3 * t_ctor.wall_med());
+  std::printf("  MtFront construction: %.2f ms CPU (%.2f wall)\n", 1e3 * t_ctor.med().cpu, 1e3 * t_ctor.med().wall);
   MtFront f(mt);
   const std::size_t base_faces = mt.image_size(0);
   const float emax = max_node_error(mt);
@@ -336,8 +320,8 @@ void bench_extract(const Options& o, const Mt& mt, std::size_t finest) {
     if (target == 0.0) f.validate();
     std::printf("| %s | %.6g | %zu | %.2f | %.2f | %.2f | %zu | %.2f | %.2f |\n",
                 target > 0.0 ? (std::to_string(static_cast<long>(target / 1e3)) + "k").c_str() : "finest", thr, faces,
-                1e3 * te.cpu_med(), 1e3 * te.wall_med(), static_cast<double>(faces) / te.cpu_med() * 1e-6, applied,
-                1e3 * tm.cpu_med(), 1e3 * tm.wall_med());
+                1e3 * te.med().cpu, 1e3 * te.med().wall, static_cast<double>(faces) / te.med().cpu * 1e-6, applied,
+                1e3 * tm.med().cpu, 1e3 * tm.med().wall);
   }
 }
 
@@ -479,34 +463,34 @@ void bench_orbit(const Options& o, const Mt& mt, const TriMesh& base) {
   }
   std::printf("  last frame's front: %zu faces; refine candidates listed %zu (%zu distinct nodes), coarsen candidates "
               "%zu; asking the criterion about all listed candidates once: %.3f ms CPU (median of 5)\n",
-              a.num_faces(), listed, distinct, coarsen_listed, 1e3 * t_eval.cpu_med());
+              a.num_faces(), listed, distinct, coarsen_listed, 1e3 * t_eval.med().cpu);
   const double fmin = *std::min_element(faces.begin(), faces.end());
   const double fmax = *std::max_element(faces.begin(), faces.end());
   std::printf("  bounding sphere of the referenced vertices: centre (%.4g, %.4g, %.4g), radius %.4g\n", s.center.x,
               s.center.y, s.center.z, s.radius);
   std::printf("  tau = %.4g px on a 1080-line viewport; faces per frame: median %.0f, min %.0f, max %.0f; update() "
               "coarsens + refines %.0f nodes per frame (median; mean %.1f)\n",
-              tau, quantile(faces, 0.5), fmin, fmax, quantile(changed, 0.5),
+              tau, median(faces), fmin, fmax, median(changed),
               [&] {
                 double s2 = 0.0;
                 for (double c : changed) s2 += c;
                 return s2 / static_cast<double>(changed.size());
               }());
-  std::printf("  criterion evaluations per frame (median): update() %.0f, extract() %.0f\n", quantile(eval_up, 0.5),
-              quantile(eval_ex, 0.5));
+  std::printf("  criterion evaluations per frame (median): update() %.0f, extract() %.0f\n", median(eval_up),
+              median(eval_ex));
   std::printf("\n| method | CPU ms / frame median | CPU p95 | wall ms / frame median | wall p95 |\n|---|---|---|---|---|\n");
-  std::printf("| update() (incremental) | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_up.cpu_med(), 1e3 * t_up.cpu_p95(),
-              1e3 * t_up.wall_med(), 1e3 * t_up.wall_p95());
-  std::printf("| update() with QueryCoherence | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_co.cpu_med(),
-              1e3 * t_co.cpu_p95(), 1e3 * t_co.wall_med(), 1e3 * t_co.wall_p95());
-  std::printf("| extract() from scratch | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_ex.cpu_med(), 1e3 * t_ex.cpu_p95(),
-              1e3 * t_ex.wall_med(), 1e3 * t_ex.wall_p95());
+  std::printf("| update() (incremental) | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_up.med().cpu, 1e3 * t_up.p95().cpu,
+              1e3 * t_up.med().wall, 1e3 * t_up.p95().wall);
+  std::printf("| update() with QueryCoherence | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_co.med().cpu,
+              1e3 * t_co.p95().cpu, 1e3 * t_co.med().wall, 1e3 * t_co.p95().wall);
+  std::printf("| extract() from scratch | %.3f | %.3f | %.3f | %.3f |\n", 1e3 * t_ex.med().cpu, 1e3 * t_ex.p95().cpu,
+              1e3 * t_ex.med().wall, 1e3 * t_ex.p95().wall);
   std::printf("  extract / coherent update (CPU medians) = %.2fx; coherent update: %.0f evaluations and %.0f reused "
               "answers per frame (median); frames differing from extract(): %zu of %d\n",
-              t_ex.cpu_med() / t_co.cpu_med(), quantile(eval_co, 0.5), quantile(reused_co, 0.5), coherent_diff,
+              t_ex.med().cpu / t_co.med().cpu, median(eval_co), median(reused_co), coherent_diff,
               K * o.reps);
-  std::printf("  extract / update (CPU medians) = %.2fx (wall %.2fx)\n", t_ex.cpu_med() / t_up.cpu_med(),
-              t_ex.wall_med() / t_up.wall_med());
+  std::printf("  extract / update (CPU medians) = %.2fx (wall %.2fx)\n", t_ex.med().cpu / t_up.med().cpu,
+              t_ex.med().wall / t_up.med().wall);
   std::printf("  frames compared: %d; face count differs in %zu (update finer %zu, coarser %zu, max |delta| %zu); "
               "face set (hash) differs in %zu; update orbit not reproducible across reps in %zu frames\n",
               K * o.reps, count_diff, finer, coarser, max_delta, set_diff, rep_diff);

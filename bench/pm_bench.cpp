@@ -66,37 +66,11 @@ using Clock = varmesh::bench::Clock;
 namespace {
 
 using bench::Lap;
+using bench::Laps;
+using bench::median;
 using bench::seconds_since;
 using bench::Stopwatch;
 using bench::process_cpu_seconds;
-
-struct Laps {
-  std::vector<double> wall, cpu;
-  void add(Lap l) {
-    wall.push_back(l.wall);
-    cpu.push_back(l.cpu);
-  }
-  Lap med() const;
-  Lap p95() const;
-  std::size_t size() const { return cpu.size(); }
-};
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(std::ceil(p * static_cast<double>(v.size()))) - 1;
-  return v[std::min(i, v.size() - 1)];
-}
-
-Lap Laps::med() const { return {median(wall), median(cpu)}; }
-Lap Laps::p95() const { return {percentile(wall, 0.95), percentile(cpu, 0.95)}; }
 
 // ---- the distance metric: every original vertex to the nearest triangle of the result ----
 

@@ -96,12 +96,7 @@ bool reset_peak() {
   return ok;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using varmesh::bench::median;
 
 // ---------------------------------------------------------------- OpenSubdiv
 
