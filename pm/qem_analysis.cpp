@@ -31,6 +31,7 @@
 #include <string>
 #include <thread>
 #include <tuple>
+#include <unordered_set>
 #include <utility>
 
 #include <glm/common.hpp>
@@ -339,6 +340,8 @@ class Analysis {
   static constexpr Index kHubFaces = 24;
   // Runs of fpool_ longer than this lose faces by a swap (collapse()), shorter ones keep their order.
   static constexpr Index kOrderedRun = 64;
+  // hub_precheck(): faces of a hub's fan tried on each side of a collapse's edge before all of them.
+  static constexpr int kHubWalk = 64;
   struct LtHub {
     LtMoments m;  // about the vertex's position, neighbours included
     bool dirty = true;
@@ -353,7 +356,8 @@ class Analysis {
   void lt_touched(Index v) {
     if (v < hub_of_.size() && hub_of_[v] != kInvalid) hubs_[hub_of_[v]].dirty = true;
   }
-  glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const;
+  struct Step;
+  glm::dvec3 preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest, const Step& st) const;
   // Slot e becomes candidate (a, b) with its cost; in the queue unless `queue` is false (it stays out).
   void set_edge(Index e, Index a, Index b, bool queue = true);
   void reinsert_edges_of(Index v);
@@ -362,6 +366,9 @@ class Analysis {
   void note_out(Index e);                // e left the queue for good (until re-examined)
   void list_out_edges(Index v);          // v's list, from its edges
   void init_out_lists();
+  void sum_hub_normals(Index v);  // v's HubNormals from its faces
+  void update_hub_normals(Index vs, Index b, const glm::dvec3& old_a, Index from_b, const Step& st);
+  glm::dvec3 raw_normal(Index f) const { return face_normal(f, kInvalid, glm::dvec3(0.0)); }
   std::size_t switch_to_lt();  // returns the number of edges costed
   // Look-ahead reads of a candidate's data (see run()): plain loads whose values are dropped (detail::touch)
   // rather than __builtin_prefetch. On the machine measured (a VM) the prefetches gained little; the same
@@ -510,6 +517,22 @@ class Analysis {
   std::vector<Index> out_of_;
   std::vector<std::vector<Index>> outs_;
   std::vector<Index> free_outs_;
+  // Per entry of outs_: the sum of the hub's faces' (unnormalised) normals, kept up to date by collapse()
+  // next to it and taken again from the faces after as many updates as the hub has faces; preserve_volume()
+  // reads it instead of the hub's faces.
+  struct HubNormals {
+    glm::dvec3 sum{0.0};
+    Index updates = 0;
+  };
+  std::vector<HubNormals> hub_normals_;
+  std::size_t live_hubs_ = 0;
+  // Pairs of neighbouring hubs, (lower slot << 32) | higher: the link condition next to two hubs (a pole
+  // and the other pole, both neighbours of a ring vertex) asks whether they are neighbours.
+  std::unordered_set<std::uint64_t> hub_links_;
+  static std::uint64_t pair_key(Index v, Index w) {
+    return v < w ? (std::uint64_t{v} << 32) | w : (std::uint64_t{w} << 32) | v;
+  }
+  void link_hub(Index v);  // the pairs of hub v and its hub neighbours
   std::vector<std::uint32_t> out_stamp_;  // per edge
   std::uint32_t out_clock_ = 0;
   mutable std::vector<Index> hub_of_;   // per slot, Lindstrom-Turk only: its entry of hubs_, or kInvalid
@@ -727,7 +750,7 @@ void Analysis::lt_shape(Index a, Index b, const glm::dvec3& o, glm::dvec3& sum, 
 // here (p came from Quadric's well-conditioned solve). With `nearest`, the step is along g instead: the
 // point of the plane nearest to p (run() tries it when the first one turns a face over or exceeds
 // max_error). Local coordinates centred on a, as in place_lt().
-glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest) const {
+glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p, bool nearest, const Step& st) const {
   const glm::dvec3 o = geo_[a].p;
   glm::dvec3 g(0.0);
   double h = 0.0;
@@ -737,10 +760,34 @@ glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p, bool
     g += n;
     h += glm::dot(n, t0);
   };
-  for (const Index* it = faces_begin(a); it != faces_end(a); ++it) add_face(&cur_[3 * *it]);
-  for (const Index* it = faces_begin(b); it != faces_end(b); ++it) {
-    const Index* c = &cur_[3 * *it];
-    if (c[0] != a && c[1] != a && c[2] != a) add_face(c);  // fl and fr are among a's faces
+  // A hub's faces through their cached normal sum (HubNormals): the faces of a add nothing to h (each
+  // plane holds o), those of b add their normal's dot with b - o.
+  auto cached = [&](Index v) {
+    if (fadj_[v].cnt <= kOrderedRun || out_of_[v] == kInvalid) return false;
+#if VARMESH_ENABLE_ASSERTS
+    glm::dvec3 fresh(0.0);
+    double scale = 0.0;
+    for (const Index* it = faces_begin(v); it != faces_end(v); ++it) {
+      fresh += raw_normal(*it);
+      scale += glm::length(raw_normal(*it));
+    }
+    VARMESH_ASSERT(glm::length(fresh - hub_normals_[out_of_[v]].sum) <= 1e-9 * scale);
+#endif
+    return true;
+  };
+  if (cached(a)) g += hub_normals_[out_of_[a]].sum;
+  else for (const Index* it = faces_begin(a); it != faces_end(a); ++it) add_face(&cur_[3 * *it]);
+  if (cached(b)) {
+    glm::dvec3 sb = hub_normals_[out_of_[b]].sum;
+    for (Index f : {st.fl, st.fr})
+      if (f != kInvalid) sb -= raw_normal(f);  // those are among a's faces
+    g += sb;
+    h += glm::dot(sb, geo_[b].p - o);
+  } else {
+    for (const Index* it = faces_begin(b); it != faces_end(b); ++it) {
+      const Index* c = &cur_[3 * *it];
+      if (c[0] != a && c[1] != a && c[2] != a) add_face(c);  // fl and fr are among a's faces
+    }
   }
   glm::dvec3 y = g;
   if (!nearest) {  // A^-1 g by cofactors (A symmetric)
@@ -812,9 +859,11 @@ void Analysis::note_out(Index e) {
 
 void Analysis::list_out_edges(Index v) {
   if (out_of_[v] == kInvalid) {
+    ++live_hubs_;
     if (free_outs_.empty()) {
       out_of_[v] = static_cast<Index>(outs_.size());
       outs_.emplace_back();
+      hub_normals_.emplace_back();
     } else {
       out_of_[v] = free_outs_.back();
       free_outs_.pop_back();
@@ -824,16 +873,80 @@ void Analysis::list_out_edges(Index v) {
   list.clear();
   for (const EdgeRef* e = edges_begin(v); e != edges_end(v); ++e)
     if (!heap_.contains(e->edge)) list.push_back(e->edge);
+  sum_hub_normals(v);
+}
+
+// The faces around vs changed (their vs corner moved from a or b, and fl, fr died): the neighbours of vs that
+// are hubs move their normal sums by the difference.
+void Analysis::update_hub_normals(Index vs, Index b, const glm::dvec3& old_a, Index from_b, const Step& st) {
+  bool near_hub = false;
+  for (Index w : ring_) near_hub |= out_of_[w] != kInvalid;
+  if (!near_hub) return;
+  auto old_normal = [&](const Index* c, glm::dvec3 at_vs) {
+    glm::dvec3 q[3];
+    for (int k = 0; k < 3; ++k) q[k] = c[k] == vs ? at_vs : geo_[c[k]].p;
+    return glm::cross(q[1] - q[0], q[2] - q[0]);
+  };
+  auto add = [&](const Index* c, const glm::dvec3& d) {
+    for (int k = 0; k < 3; ++k)
+      if (c[k] != vs && out_of_[c[k]] != kInvalid) {
+        HubNormals& h = hub_normals_[out_of_[c[k]]];
+        h.sum += d;
+        ++h.updates;
+      }
+  };
+  const Run r = fadj_[vs];
+  for (Index i = r.off; i < r.off + r.cnt; ++i) {
+    const Index f = fpool_[i];
+    const Index* c = &cur_[3 * f];
+    if (!((c[0] != vs && out_of_[c[0]] != kInvalid) || (c[1] != vs && out_of_[c[1]] != kInvalid) ||
+          (c[2] != vs && out_of_[c[2]] != kInvalid)))
+      continue;
+    add(c, raw_normal(f) - old_normal(c, i < from_b ? old_a : geo_[b].p));
+  }
+  // fl and fr: corners a (now vs), b and an apex; their normals leave the apex's sum.
+  for (Index f : {st.fl, st.fr}) {
+    if (f == kInvalid) continue;
+    glm::dvec3 q[3];
+    const Index* c = &cur_[3 * f];
+    for (int k = 0; k < 3; ++k) q[k] = c[k] == vs ? old_a : geo_[c[k]].p;
+    const Index apex = c[0] != vs && c[0] != b ? c[0] : c[1] != vs && c[1] != b ? c[1] : c[2];
+    if (out_of_[apex] == kInvalid) continue;
+    HubNormals& h = hub_normals_[out_of_[apex]];
+    h.sum -= glm::cross(q[1] - q[0], q[2] - q[0]);
+    ++h.updates;
+  }
+  // Taken again from the faces after as many updates as faces, so that rounding does not pile up (once every
+  // update is in: a sum taken again halfway would count the rest twice).
+  for (Index w : ring_)
+    if (out_of_[w] != kInvalid && hub_normals_[out_of_[w]].updates > fadj_[w].cnt) sum_hub_normals(w);
+}
+
+void Analysis::sum_hub_normals(Index v) {
+  HubNormals& h = hub_normals_[out_of_[v]];
+  h.sum = glm::dvec3(0.0);
+  h.updates = 0;
+  for (const Index* it = faces_begin(v); it != faces_end(v); ++it) h.sum += raw_normal(*it);
 }
 
 void Analysis::init_out_lists() {
   out_of_.assign(node_alive_.size(), kInvalid);
   outs_.clear();
   free_outs_.clear();
+  hub_normals_.clear();
+  live_hubs_ = 0;
   out_stamp_.assign(edges_.size(), 0);
   out_clock_ = 0;
   for (std::size_t v = 0; v < node_alive_.size(); ++v)
     if (node_alive_[v] && eadj_[v].cnt > kHubFaces) list_out_edges(static_cast<Index>(v));
+  hub_links_.clear();
+  for (std::size_t v = 0; v < node_alive_.size(); ++v)
+    if (out_of_[v] != kInvalid) link_hub(static_cast<Index>(v));
+}
+
+void Analysis::link_hub(Index v) {
+  for (const EdgeRef* e = edges_begin(v); e != edges_end(v); ++e)
+    if (out_of_[e->to] != kInvalid) hub_links_.insert(pair_key(v, e->to));
 }
 
 Analysis::Verdict Analysis::check_links(Index a, Index b, Step& st) {
@@ -879,12 +992,12 @@ Analysis::Verdict Analysis::check_links(Index a, Index b, Step& st) {
   const Index small = eadj_[a].cnt <= eadj_[b].cnt ? a : b, big = small == a ? b : a;
   if (eadj_[big].cnt > kOrderedRun) {
     looked_up = true;
-    for (const EdgeRef* e = edges_begin(small); e != edges_end(small) && looked_up; ++e) {
+    for (const EdgeRef* e = edges_begin(small); e != edges_end(small); ++e) {
       const Index w = e->to;
       if (w == big || w == vl || w == vr) continue;
-      if (eadj_[w].cnt > kOrderedRun) {
-        looked_up = false;  // another hub: marks below
-        break;
+      if (eadj_[w].cnt > kOrderedRun && out_of_[w] != kInvalid && out_of_[big] != kInvalid) {  // two hubs
+        if (hub_links_.contains(pair_key(w, big))) return Verdict::kLink;
+        continue;
       }
       for (const EdgeRef* x = edges_begin(w); x != edges_end(w); ++x)
         if (x->to == big) return Verdict::kLink;
@@ -913,11 +1026,13 @@ Analysis::Verdict Analysis::check_links(Index a, Index b, Step& st) {
 }
 
 // A hub (a vertex of more than kOrderedRun faces) moved to p by a collapse: the faces that turn over are
-// tried first where they are likely, in O(1) or O(the small end's second ring) instead of O(the hub's
-// faces): the face that turned over at the last refusal around a hub (a pole among slivers whose float
-// corners make a ragged ring: moved towards any of them, it turns the same ones over), then the faces next
-// to the small end (a pole moved onto its ring). kOk when none turns over (check() then reads every face);
-// otherwise the verdict check() would give: kFlip, or kLink for the tetrahedron case, which comes first.
+// tried first where they are likely, in O(1) or O(kHubWalk) instead of O(the hub's faces): the face that
+// turned over at the last refusal around a hub (a pole among slivers whose float corners make a ragged
+// ring: moved towards any of them, it turns the same ones over), then the small end's faces and the hub's
+// fan walked away from the edge (a pole moved onto its ring turns faces over next to where it lands: up to
+// ~30 faces away on a ring of 100,000 slivers, ragged in float). kOk when none turns over (check() then
+// reads every face); otherwise the verdict check() would give: kFlip, or kLink for the tetrahedron case,
+// which comes first.
 Analysis::Verdict Analysis::hub_precheck(Index a, Index b, const glm::dvec3& p, const Step& st) const {
   if (std::max(fadj_[a].cnt, fadj_[b].cnt) <= kOrderedRun) return Verdict::kOk;
   bool flipped = false;
@@ -932,14 +1047,28 @@ Analysis::Verdict Analysis::hub_precheck(Index a, Index b, const glm::dvec3& p, 
     if (fadj_[h].cnt <= kOrderedRun || fadj_[s].cnt > kOrderedRun || p == geo_[h].p) continue;
     for (const Index* it = faces_begin(s); it != faces_end(s) && !flipped; ++it)
       if (*it != st.fl && *it != st.fr) flipped = turns_over(*it, s, p, n1);
-    for (const EdgeRef* e = edges_begin(s); e != edges_end(s) && !flipped; ++e) {
-      if (e->to == h || fadj_[e->to].cnt > kOrderedRun) continue;
-      for (const Index* it = faces_begin(e->to); it != faces_end(e->to) && !flipped; ++it) {
-        const Index f = *it;
-        if (f != st.fl && f != st.fr && (cur_[3 * f] == h || cur_[3 * f + 1] == h || cur_[3 * f + 2] == h))
-          flipped = turns_over(f, h, p, n1);
+    // The hub's fan walked from the edge's faces on, kHubWalk faces each way, through the small vertices
+    // of its rim (a face around h across its edge (h, w) is among w's faces).
+    auto walk = [&](Index prev, Index w) {
+      for (int step = 0; step < kHubWalk && !flipped && prev != kInvalid; ++step) {
+        if (w == kInvalid || fadj_[w].cnt > kOrderedRun) return;
+        Index next = kInvalid;
+        for (const Index* it = faces_begin(w); it != faces_end(w); ++it) {
+          const Index* c = &cur_[3 * *it];
+          if (*it != prev && (c[0] == h || c[1] == h || c[2] == h)) {
+            next = *it;
+            break;
+          }
+        }
+        if (next == kInvalid || next == st.fl || next == st.fr) return;
+        flipped = turns_over(next, h, p, n1);
+        const Index* c = &cur_[3 * next];
+        w = c[0] != h && c[0] != w ? c[0] : c[1] != h && c[1] != w ? c[1] : c[2];
+        prev = next;
       }
-    }
+    };
+    walk(st.fl, st.vl);
+    walk(st.fr, st.vr);
   }
   if (!flipped) return Verdict::kOk;
   if (st.vl == kInvalid || st.vr == kInvalid) return Verdict::kFlip;
@@ -1126,6 +1255,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   const double err = step_error(a, b, st);
 
   // The new node, in a's slot (mark_[a] holds an old stamp: no reset needed).
+  const glm::dvec3 old_a = geo_[a].p;
   node_of_[vs] = static_cast<Index>(raw_.positions.size());
   geo_[vs].p = pl.p;
   if (colors_) {
@@ -1150,7 +1280,9 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   const Index foff = static_cast<Index>(fpool_.size());
   NormalCone cone = enclose(raw_.bounds[na].cone, raw_.bounds[nb].cone);
   const glm::dvec3* n1 = new_normal_.data();  // check()'s new normals, in this order
-  for (Index v : {a, b})
+  Index from_b = 0;  // where the faces that were b's begin in vs's run
+  for (Index v : {a, b}) {
+    if (v == b) from_b = static_cast<Index>(fpool_.size());
     for (Index i = fadj_[v].off, end = i + fadj_[v].cnt; i < end; ++i) {
       const Index f = fpool_[i];  // by index: the push_back below may move the pool
       if (f == fl || f == fr) continue;
@@ -1167,6 +1299,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       if (n == glm::dvec3(0.0) || cone.is_full()) continue;
       cone = enclose_normal(cone, glm::vec3(n));
     }
+  }
   fadj_[vs] = {foff, static_cast<Index>(fpool_.size()) - foff};
   // fl and fr leave the runs of the apexes: in order in a short run (the hierarchies of the meshes measured
   // depend on that order), by moving the run's last face into their place in a long one (a hub that is an
@@ -1204,6 +1337,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       raw_.ring_items.push_back(node_of_[w]);
     }
   raw_.ring_offsets.push_back(static_cast<Index>(raw_.ring_items.size()));
+  if (live_hubs_ > 0) update_hub_normals(vs, b, old_a, from_b, st);
   if (lt_) {  // every face that changed has vs and two of these as corners
     lt_touched(vs);
     for (Index w : ring_) lt_touched(w);
@@ -1268,8 +1402,14 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     outs_[out_of_[b]].clear();
     free_outs_.push_back(out_of_[b]);
     out_of_[b] = kInvalid;
+    --live_hubs_;
+    for (const EdgeRef* e = edges_begin(b); e != edges_end(b); ++e)  // b's run still names its neighbours
+      hub_links_.erase(pair_key(b, e->to));
   }
-  if (out_of_[vs] != kInvalid || eadj_[vs].cnt > kHubFaces) list_out_edges(vs);
+  if (out_of_[vs] != kInvalid || eadj_[vs].cnt > kHubFaces) {
+    list_out_edges(vs);
+    link_hub(vs);
+  }
   // Lindstrom-Turk costs are memoryless: they read the faces around both ends, and those of every neighbour
   // of vs just changed. The edges at vs were re-costed above; the others at a neighbour are marked stale
   // and re-costed when they reach the top of the queue (run(): lazy evaluation), which costs one placement
@@ -2144,7 +2284,7 @@ void Analysis::collapse_loop(QemStats& stats) {
     if (verdict == Verdict::kOk && volume_ && pl.solved) {
       const glm::dvec3 unmoved = pl.p;
       for (int attempt = 0; attempt < 3; ++attempt) {
-        const glm::dvec3 x = attempt == 2 ? unmoved : preserve_volume(a, b, unmoved, attempt == 1);
+        const glm::dvec3 x = attempt == 2 ? unmoved : preserve_volume(a, b, unmoved, attempt == 1, step);
         if (attempt > 0 && x == pl.p) continue;  // the same point again (no volume to keep): same verdict
         pl.p = x;
         verdict = check(a, b, pl.p, step);
