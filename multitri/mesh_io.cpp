@@ -1,11 +1,11 @@
 #include "multitri/mesh_io.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <string>
 #include <string_view>
 
 #include "multitri/detail/mesh_io_formats.hpp"
+#include "multitri/detail/text_cursor.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/file_util.hpp"
 
@@ -21,40 +21,6 @@ bool ends_with_ci(const std::string& s, const char* suffix) {
     if (c != suf[i]) return false;
   }
   return true;
-}
-
-// The first lone CR (one not followed by LF) in `text`, or npos. LF files have no CR at all, and memchr
-// says so at memory speed. From the first CR on, bytes are tested in blocks with no exit inside a block,
-// a loop the compiler vectorizes, so that a CRLF file costs about what an LF file costs (a memchr call
-// per line, to look at the byte after each CR, took three times as long on a 47 MB OBJ).
-std::size_t find_lone_cr(std::string_view text) {
-  const std::size_t first = text.find('\r');
-  if (first == std::string_view::npos) return first;
-  const char* p = text.data();
-  const std::size_t last = text.size() - 1;  // a CR there has no byte after it: it is lone
-  constexpr std::size_t kBlock = 256;
-  for (std::size_t i = first; i < last; i += kBlock) {
-    const std::size_t end = std::min(i + kBlock, last);
-    unsigned char lone = 0;
-    for (std::size_t j = i; j < end; ++j) lone |= static_cast<unsigned char>((p[j] == '\r') & (p[j + 1] != '\n'));
-    if (lone != 0)
-      for (std::size_t j = i;; ++j)
-        if (p[j] == '\r' && p[j + 1] != '\n') return j;
-  }
-  return p[last] == '\r' ? last : std::string_view::npos;
-}
-
-// Returns `data` with every lone CR turned into LF: `data` itself when there is none (LF and CRLF files
-// are read in place), else a copy in `storage`. Bytes keep their places, so line numbers count each line
-// end once and byte offsets stay those of the file. ply_io.cpp has a copy of both functions, for PLY
-// headers and ascii bodies; detail/text_cursor.hpp would be their shared home.
-std::string_view lone_cr_to_lf(std::string_view data, std::string& storage) {
-  std::size_t cr = find_lone_cr(data);
-  if (cr == std::string_view::npos) return data;
-  storage.assign(data);
-  for (; cr != std::string::npos; cr = storage.find('\r', cr + 1))
-    if (cr + 1 == storage.size() || storage[cr + 1] != '\n') storage[cr] = '\n';
-  return storage;
 }
 
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -100,7 +66,7 @@ TriMesh read_mesh_data(const std::string& path, std::string_view data, ReadInfo*
   // and takes a CR for a blank, which is right for CRLF but would join lines that end in a lone CR. PLY
   // does this itself, for its header and ascii bodies only: a binary body must not be touched.
   std::string unified;
-  if (format != MeshFormat::kPly) data = lone_cr_to_lf(data, unified);
+  if (format != MeshFormat::kPly) data = detail::lone_cr_to_lf(data, unified);
   ReadInfo local;
   TriMesh mesh;
   switch (format) {

@@ -106,40 +106,6 @@ struct PlyHeader {
   const PlyElement* vertex = nullptr;
 };
 
-// The first lone CR (one not followed by LF) in `text`, or npos. LF files have no CR at all, and memchr
-// says so at memory speed. From the first CR on, bytes are tested in blocks with no exit inside a block,
-// a loop the compiler vectorizes, so that a CRLF file costs about what an LF file costs (a memchr call
-// per line, to look at the byte after each CR, took three times as long on a 47 MB OBJ).
-std::size_t find_lone_cr(std::string_view text) {
-  const std::size_t first = text.find('\r');
-  if (first == std::string_view::npos) return first;
-  const char* p = text.data();
-  const std::size_t last = text.size() - 1;  // a CR there has no byte after it: it is lone
-  constexpr std::size_t kBlock = 256;
-  for (std::size_t i = first; i < last; i += kBlock) {
-    const std::size_t end = std::min(i + kBlock, last);
-    unsigned char lone = 0;
-    for (std::size_t j = i; j < end; ++j) lone |= static_cast<unsigned char>((p[j] == '\r') & (p[j + 1] != '\n'));
-    if (lone != 0)
-      for (std::size_t j = i;; ++j)
-        if (p[j] == '\r' && p[j + 1] != '\n') return j;
-  }
-  return p[last] == '\r' ? last : std::string_view::npos;
-}
-
-// Returns `text` with every lone CR turned into LF: `text` itself when there is none, else a copy in
-// `storage`. Bytes keep their places, so offsets and line numbers stay true. These two functions are
-// copies of those in mesh_io.cpp, which applies the same rule to whole OBJ and OFF files; here they serve
-// the header and ascii bodies only.
-std::string_view lone_cr_to_lf(std::string_view text, std::string& storage) {
-  std::size_t cr = find_lone_cr(text);
-  if (cr == std::string_view::npos) return text;
-  storage.assign(text);
-  for (; cr != std::string::npos; cr = storage.find('\r', cr + 1))
-    if (cr + 1 == storage.size() || storage[cr + 1] != '\n') storage[cr] = '\n';
-  return storage;
-}
-
 // The extent of the header text, found before it is parsed so that line ends can be unified in it
 // without touching a binary body: lines end at LF, CRLF or a lone CR, and the header runs to the line end
 // of the first line whose first token is end_header (to the end of the data when there is none, and

@@ -13,6 +13,10 @@
 
 namespace varmesh::detail {
 
+/// read_obj and read_off expect every lone CR in `data` to be an LF already: read_mesh_data passes OBJ
+/// and OFF text through lone_cr_to_lf (detail/text_cursor.hpp) first, and the text cursor ends lines at LF
+/// only, so a lone CR left in would join two lines. read_ply takes the file as it is and does this itself,
+/// for its header and ascii bodies only, since a binary body must keep its bytes.
 TriMesh read_obj(const std::string& path, std::string_view data, ReadInfo& info);
 TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info);
 TriMesh read_ply(const std::string& path, std::string_view data, ReadInfo& info);
