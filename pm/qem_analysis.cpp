@@ -533,6 +533,8 @@ class Analysis {
     return v < w ? (std::uint64_t{v} << 32) | w : (std::uint64_t{w} << 32) | v;
   }
   void link_hub(Index v);  // the pairs of hub v and its hub neighbours
+  template <typename Holds>
+  void retry_hub_edges(Index w, const Holds& holds);
   std::vector<std::uint32_t> out_stamp_;  // per edge
   std::uint32_t out_clock_ = 0;
   mutable std::vector<Index> hub_of_;   // per slot, Lindstrom-Turk only: its entry of hubs_, or kInvalid
@@ -1459,51 +1461,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     if (!rejected_[w]) continue;
     rejected_[w] = 0;
     if (out_of_[w] != kInvalid) {
-      std::vector<Index>& list = outs_[out_of_[w]];
-#if VARMESH_ENABLE_ASSERTS
-      // Every edge of w outside the queue is in the list, or left it held: its other end, marked, tries it.
-      if (++out_clock_ == 0) {
-        std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
-        out_clock_ = 1;
-      }
-      for (const Index e : list) out_stamp_[e] = out_clock_;
-      auto listed_at = [&](Index v, Index e) {
-        return out_of_[v] != kInvalid && std::find(outs_[out_of_[v]].begin(), outs_[out_of_[v]].end(), e) != outs_[out_of_[v]].end();
-      };
-      for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
-        VARMESH_ASSERT(heap_.contains(e->edge) || out_stamp_[e->edge] == out_clock_ ||
-                       (rejected_[e->to] && (out_of_[e->to] == kInvalid || listed_at(e->to, e->edge))));
-#endif
-      if (++out_clock_ == 0) {  // wrapped: no stamp may look current
-        std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
-        out_clock_ = 1;
-      }
-      std::size_t keep = 0;
-      for (const Index e : list) {
-        if (out_stamp_[e] == out_clock_ || !edge_at(e, w) || heap_.contains(e)) continue;
-        out_stamp_[e] = out_clock_;
-        const EdgeRef ref{e, edges_[e].a == w ? edges_[e].b : edges_[e].a};
-        // Not exact, unlike the link condition's hold: an edge refused for a face turned over waits for a
-        // change around its other end (which then tries it again, rejected_ being set on both ends), not
-        // for any change around the hub. The faces that turn over are nearly always next to the small end
-        // (a pole moved onto its ring), and the hub is next to every collapse around it: each of its refused
-        // edges was tried again after each, each in O(its degree) (a cone over a disk of 100,000 slivers
-        // took minutes).
-        const bool flip_held = link_refused_[e] == kHeldFlip && mark_[ref.to] != stamp_;
-        if (flip_held || link_holds(w, ref)) {
-          // A held edge whose other end is no hub leaves the list: that end tries it again (it is marked
-          // rejected), when its own neighbourhood changes, which the verdict waits for.
-          if (out_of_[ref.to] == kInvalid) {
-            rejected_[ref.to] = 1;
-          } else {
-            rejected_[w] = 1;
-            list[keep++] = e;
-          }
-        } else {
-          heap_.push(e, edges_[e].cost, tie_key(edges_[e]));
-        }
-      }
-      list.resize(keep);
+      retry_hub_edges(w, link_holds);
       continue;
     }
     for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e) {
@@ -1512,6 +1470,57 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       else heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
     }
   }
+}
+
+// Neighbour w of a collapse is a hub with edges refused: those of its list go back into the queue unless a
+// verdict holds (`holds`: the link condition's, as for any vertex).
+template <typename Holds>
+void Analysis::retry_hub_edges(Index w, const Holds& holds) {
+  std::vector<Index>& list = outs_[out_of_[w]];
+#if VARMESH_ENABLE_ASSERTS
+  // Every edge of w outside the queue is in the list, or left it held: its other end, marked, tries it.
+  if (++out_clock_ == 0) {
+    std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
+    out_clock_ = 1;
+  }
+  for (const Index e : list) out_stamp_[e] = out_clock_;
+  auto listed_at = [&](Index v, Index e) {
+    return out_of_[v] != kInvalid && std::find(outs_[out_of_[v]].begin(), outs_[out_of_[v]].end(), e) != outs_[out_of_[v]].end();
+  };
+  for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e)
+    VARMESH_ASSERT(heap_.contains(e->edge) || out_stamp_[e->edge] == out_clock_ ||
+                   (rejected_[e->to] && (out_of_[e->to] == kInvalid || listed_at(e->to, e->edge))));
+#endif
+  if (++out_clock_ == 0) {  // wrapped: no stamp may look current
+    std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
+    out_clock_ = 1;
+  }
+  std::size_t keep = 0;
+  for (const Index e : list) {
+    if (out_stamp_[e] == out_clock_ || !edge_at(e, w) || heap_.contains(e)) continue;
+    out_stamp_[e] = out_clock_;
+    const EdgeRef ref{e, edges_[e].a == w ? edges_[e].b : edges_[e].a};
+    // Not exact, unlike the link condition's hold: an edge refused for a face turned over waits for a
+    // change around its other end (which then tries it again, rejected_ being set on both ends), not
+    // for any change around the hub. The faces that turn over are nearly always next to the small end
+    // (a pole moved onto its ring), and the hub is next to every collapse around it: each of its refused
+    // edges was tried again after each, each in O(its degree) (a cone over a disk of 100,000 slivers
+    // took minutes).
+    const bool flip_held = link_refused_[e] == kHeldFlip && mark_[ref.to] != stamp_;
+    if (flip_held || holds(w, ref)) {
+      // A held edge whose other end is no hub leaves the list: that end tries it again (it is marked
+      // rejected), when its own neighbourhood changes, which the verdict waits for.
+      if (out_of_[ref.to] == kInvalid) {
+        rejected_[ref.to] = 1;
+      } else {
+        rejected_[w] = 1;
+        list[keep++] = e;
+      }
+    } else {
+      heap_.push(e, edges_[e].cost, tie_key(edges_[e]));
+    }
+  }
+  list.resize(keep);
 }
 
 void Analysis::init_faces() {
