@@ -537,6 +537,12 @@ class Analysis {
   void retry_hub_edges(Index w, const Holds& holds);
   std::vector<std::uint32_t> out_stamp_;  // per edge
   std::uint32_t out_clock_ = 0;
+  void tick_out_clock() {
+    if (++out_clock_ == 0) {  // wrapped: no stamp may look current
+      std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
+      out_clock_ = 1;
+    }
+  }
   mutable std::vector<Index> hub_of_;   // per slot, Lindstrom-Turk only: its entry of hubs_, or kInvalid
   mutable std::vector<LtHub> hubs_;
   mutable std::vector<std::uint32_t> lt_mark_;  // per slot, stamps of lt_moments_about()
@@ -884,11 +890,6 @@ void Analysis::update_hub_normals(Index vs, Index b, const glm::dvec3& old_a, In
   bool near_hub = false;
   for (Index w : ring_) near_hub |= out_of_[w] != kInvalid;
   if (!near_hub) return;
-  auto old_normal = [&](const Index* c, glm::dvec3 at_vs) {
-    glm::dvec3 q[3];
-    for (int k = 0; k < 3; ++k) q[k] = c[k] == vs ? at_vs : geo_[c[k]].p;
-    return glm::cross(q[1] - q[0], q[2] - q[0]);
-  };
   auto add = [&](const Index* c, const glm::dvec3& d) {
     for (int k = 0; k < 3; ++k)
       if (c[k] != vs && out_of_[c[k]] != kInvalid) {
@@ -904,18 +905,16 @@ void Analysis::update_hub_normals(Index vs, Index b, const glm::dvec3& old_a, In
     if (!((c[0] != vs && out_of_[c[0]] != kInvalid) || (c[1] != vs && out_of_[c[1]] != kInvalid) ||
           (c[2] != vs && out_of_[c[2]] != kInvalid)))
       continue;
-    add(c, raw_normal(f) - old_normal(c, i < from_b ? old_a : geo_[b].p));
+    add(c, raw_normal(f) - face_normal(f, vs, i < from_b ? old_a : geo_[b].p));  // b keeps its position
   }
   // fl and fr: corners a (now vs), b and an apex; their normals leave the apex's sum.
   for (Index f : {st.fl, st.fr}) {
     if (f == kInvalid) continue;
-    glm::dvec3 q[3];
     const Index* c = &cur_[3 * f];
-    for (int k = 0; k < 3; ++k) q[k] = c[k] == vs ? old_a : geo_[c[k]].p;
     const Index apex = c[0] != vs && c[0] != b ? c[0] : c[1] != vs && c[1] != b ? c[1] : c[2];
     if (out_of_[apex] == kInvalid) continue;
     HubNormals& h = hub_normals_[out_of_[apex]];
-    h.sum -= glm::cross(q[1] - q[0], q[2] - q[0]);
+    h.sum -= face_normal(f, vs, old_a);
     ++h.updates;
   }
   // Taken again from the faces after as many updates as faces, so that rounding does not pile up (once every
@@ -1479,10 +1478,7 @@ void Analysis::retry_hub_edges(Index w, const Holds& holds) {
   std::vector<Index>& list = outs_[out_of_[w]];
 #if VARMESH_ENABLE_ASSERTS
   // Every edge of w outside the queue is in the list, or left it held: its other end, marked, tries it.
-  if (++out_clock_ == 0) {
-    std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
-    out_clock_ = 1;
-  }
+  tick_out_clock();
   for (const Index e : list) out_stamp_[e] = out_clock_;
   auto listed_at = [&](Index v, Index e) {
     return out_of_[v] != kInvalid && std::find(outs_[out_of_[v]].begin(), outs_[out_of_[v]].end(), e) != outs_[out_of_[v]].end();
@@ -1491,10 +1487,7 @@ void Analysis::retry_hub_edges(Index w, const Holds& holds) {
     VARMESH_ASSERT(heap_.contains(e->edge) || out_stamp_[e->edge] == out_clock_ ||
                    (rejected_[e->to] && (out_of_[e->to] == kInvalid || listed_at(e->to, e->edge))));
 #endif
-  if (++out_clock_ == 0) {  // wrapped: no stamp may look current
-    std::fill(out_stamp_.begin(), out_stamp_.end(), 0u);
-    out_clock_ = 1;
-  }
+  tick_out_clock();
   std::size_t keep = 0;
   for (const Index e : list) {
     if (out_stamp_[e] == out_clock_ || !edge_at(e, w) || heap_.contains(e)) continue;
