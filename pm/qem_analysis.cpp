@@ -177,6 +177,12 @@ struct LtMoments {
     nbr += m.nbr, nbrs += m.nbrs;
     return *this;
   }
+  LtMoments& operator-=(const LtMoments& m) noexcept {
+    n -= m.n, c -= m.c, h0 -= m.h0, h1 -= m.h1, h2 -= m.h2, d -= m.d, k -= m.k;
+    e1 -= m.e1, e2 -= m.e2, cb -= m.cb, g0 -= m.g0, g1 -= m.g1, g2 -= m.g2, kb -= m.kb, borders -= m.borders;
+    nbr -= m.nbr, nbrs -= m.nbrs;
+    return *this;
+  }
   // The same sums about o + t: d -> d - n.t, and p -> p - t (so pq -> pq - t x e).
   void move_origin(const glm::dvec3& t) noexcept {
     const glm::dvec3 ht(glm::dot(h0, t), glm::dot(h1, t), glm::dot(h2, t));
@@ -345,7 +351,17 @@ class Analysis {
   struct LtHub {
     LtMoments m;  // about the vertex's position, neighbours included
     bool dirty = true;
+    Index updates = 0;  // lt_update_hubs() since the sums were taken afresh
   };
+  // A collapse next to a hub with clean sums changes only the terms of the hub's faces at a or b, its border
+  // edges to them and the neighbours a and b: lt_hub_part() sums those (before the collapse, with x1 = a,
+  // x2 = b; after it, with x1 = vs), and lt_update_hubs() moves the cache by the difference instead of
+  // summing all the hub's faces again (O(degree) at every collapse around a pole: a cone of 20,000
+  // slivers took 23 s). After as many updates as the hub has faces its sums are taken afresh (rounding).
+  LtMoments lt_hub_part(Index h, Index x1, Index x2) const;
+  void lt_hub_parts_before(Index a, Index b);
+  void lt_update_hubs(Index vs);
+  std::vector<std::pair<Index, LtMoments>> lt_parts_;  // scratch: hubs next to a collapse, their parts before
   LtMoments lt_edge_moments(Index a, Index b, const glm::dvec3& o) const;
   LtMoments lt_moments(Index v, const glm::dvec3& o) const;
   // Without the faces holding `except` and the border edge to it (the other end of an edge).
@@ -506,7 +522,20 @@ class Analysis {
   std::vector<glm::dvec3> new_normal_;  // scratch of check() for collapse()
   std::vector<Index> new_fan_;          // scratch of check(): the faces of a and b that stay
   Index flip_hint_ = kInvalid;          // the face that turned over at check()'s last refusal around a hub
-  std::vector<std::uint8_t> stale_;     // per edge, Lindstrom-Turk only: costed before its neighbourhood changed
+  // Lindstrom-Turk only: the collapse count when each edge was last costed, and when the faces around each
+  // vertex slot last changed. An edge is stale (costed before its neighbourhood changed) when it was costed
+  // before either end changed: a collapse stamps its ring in O(ring) instead of marking every edge of each
+  // neighbour (O(a hub's degree) at every collapse next to a hub).
+  std::vector<std::uint32_t> lt_costed_, lt_changed_;
+  std::uint32_t lt_clock_ = 0;
+  bool lt_stale(Index e) const {
+    return lt_costed_[e] < std::max(lt_changed_[edges_[e].a], lt_changed_[edges_[e].b]);
+  }
+  void lt_reset_clocks() {
+    lt_clock_ = 0;
+    lt_costed_.assign(lt_ ? edges_.size() : 0, 0);
+    lt_changed_.assign(lt_ ? node_alive_.size() : 0, 0);
+  }
   // Per edge: its last verdict was the link condition's (kHeldLink) or a face turned over (kHeldFlip).
   std::vector<std::uint8_t> link_refused_;
   static constexpr std::uint8_t kHeldLink = 1, kHeldFlip = 2;
@@ -639,6 +668,7 @@ LtMoments Analysis::lt_moments(Index v, const glm::dvec3& o) const {
   if (h.dirty) {
     h.m = lt_moments_about(v, geo_[v].p, true);
     h.dirty = false;
+    h.updates = 0;
   }
   LtMoments m = h.m;
   m.move_origin(o - geo_[v].p);
@@ -716,6 +746,59 @@ LtMoments Analysis::lt_moments_about(Index v, const glm::dvec3& o, bool with_nei
   return m;
 }
 
+// The terms of hub h's cached sums that involve x1 or x2 (kInvalid for none): the planes of its faces that
+// hold either (each once), its border edges to them and their positions as neighbours, about h.
+LtMoments Analysis::lt_hub_part(Index h, Index x1, Index x2) const {
+  LtMoments m;
+  const glm::dvec3 o = geo_[h].p, zero(0.0);
+  for (const Index x : {x1, x2}) {
+    if (x == kInvalid) continue;
+    Index nexts = 0, prevs = 0;  // faces where x follows h, where x precedes h
+    for (const Index* it = faces_begin(x); it != faces_end(x); ++it) {
+      const Index* c = &cur_[3 * *it];
+      const int kh = c[0] == h ? 0 : c[1] == h ? 1 : c[2] == h ? 2 : -1;
+      if (kh < 0) continue;
+      c[(kh + 1) % 3] == x ? ++nexts : ++prevs;
+      if (x == x2 && (c[0] == x1 || c[1] == x1 || c[2] == x1)) continue;  // summed with x1's faces
+      const glm::dvec4& pl = fplane_[*it];
+      const glm::dvec3 n(pl);
+      m.plane(n, pl.w - glm::dot(n, o));
+    }
+    if (nexts + prevs == 0) continue;
+    const glm::dvec3 px = geo_[x].p - o;
+    m.neighbour(px);
+    // As lt_moments_about(): h -> x is a border edge for each face holding it when no face holds x -> h.
+    if (border_[h]) {
+      for (Index i = 0; prevs == 0 && i < nexts; ++i) m.border(zero, px);
+      for (Index i = 0; nexts == 0 && i < prevs; ++i) m.border(px, zero);
+    }
+  }
+  return m;
+}
+
+void Analysis::lt_hub_parts_before(Index a, Index b) {
+  lt_parts_.clear();
+  if (hubs_.empty()) return;
+  for (const Index v : {a, b})
+    for (const Index* it = faces_begin(v); it != faces_end(v); ++it)
+      for (int k = 0; k < 3; ++k) {
+        const Index h = cur_[3 * *it + k];
+        if (h == a || h == b || h >= hub_of_.size() || hub_of_[h] == kInvalid || hubs_[hub_of_[h]].dirty) continue;
+        if (std::any_of(lt_parts_.begin(), lt_parts_.end(), [&](const auto& part) { return part.first == h; })) continue;
+        lt_parts_.emplace_back(h, lt_hub_part(h, a, b));
+      }
+}
+
+void Analysis::lt_update_hubs(Index vs) {
+  for (auto& [h, before] : lt_parts_) {
+    LtHub& hub = hubs_[hub_of_[h]];
+    hub.m -= before;
+    hub.m += lt_hub_part(h, vs, kInvalid);
+    hub.dirty = ++hub.updates > fadj_[h].cnt;
+  }
+  lt_parts_.clear();
+}
+
 // LT98's shape objective: the neighbours of a or b other than a and b, their summed positions about o and
 // their count. Those of the end with more faces, g, from its cache when it is a hub; then each neighbour w of
 // the other end s that is not one of g's (no face of w holds g).
@@ -742,9 +825,24 @@ void Analysis::lt_shape(Index a, Index b, const glm::dvec3& o, glm::dvec3& sum, 
   neighbours(s, ns);
   for (Index w : ns) {
     if (w == g) continue;
+    // A face holding both: looked up in hub_links_ when both are hubs, else searched among the faces of
+    // the one with fewer (w can be a pole next to s).
     bool common = false;
-    for (const Index* it = faces_begin(w); it != faces_end(w) && !common; ++it)
-      common = cur_[3 * *it] == g || cur_[3 * *it + 1] == g || cur_[3 * *it + 2] == g;
+    if (out_of_[w] != kInvalid && out_of_[g] != kInvalid) {
+      common = hub_links_.contains(pair_key(w, g));
+    } else {
+      const Index from = fadj_[w].cnt <= fadj_[g].cnt ? w : g, other = from == w ? g : w;
+      for (const Index* it = faces_begin(from); it != faces_end(from) && !common; ++it)
+        common = cur_[3 * *it] == other || cur_[3 * *it + 1] == other || cur_[3 * *it + 2] == other;
+    }
+#if VARMESH_ENABLE_ASSERTS
+    {
+      bool any = false;
+      for (const Index* it = faces_begin(w); it != faces_end(w) && !any; ++it)
+        any = cur_[3 * *it] == g || cur_[3 * *it + 1] == g || cur_[3 * *it + 2] == g;
+      VARMESH_ASSERT(any == common);
+    }
+#endif
     if (!common) sum += geo_[w].p - o, count += 1.0;
   }
 }
@@ -818,6 +916,7 @@ glm::dvec3 Analysis::preserve_volume(Index a, Index b, const glm::dvec3& p, bool
 void Analysis::set_edge(Index e, Index a, Index b, bool queue) {
   const Placement pl = place(a, b);
   edges_[e] = node_of_[a] < node_of_[b] ? Edge{a, b, pl.cost, kept(pl)} : Edge{b, a, pl.cost, kept(pl)};
+  if (lt_) lt_costed_[e] = lt_clock_;
   if (queue) heap_.update(e, edges_[e].cost, tie_key(edges_[e]));
 }
 
@@ -832,7 +931,7 @@ std::size_t Analysis::switch_to_lt() {
       const glm::dvec3& p0 = geo_[cur_[3 * f]].p;
       set_plane(static_cast<Index>(f), glm::cross(geo_[cur_[3 * f + 1]].p - p0, geo_[cur_[3 * f + 2]].p - p0));
     }
-  stale_.assign(edges_.size(), 0);
+  lt_reset_clocks();
   heap_.clear();
   for (std::size_t v = 0; v < node_alive_.size(); ++v) {
     if (!node_alive_[v]) continue;
@@ -1045,9 +1144,10 @@ Analysis::Verdict Analysis::hub_precheck(Index a, Index b, const glm::dvec3& p, 
   }
   for (int side = 0; side < 2 && !flipped; ++side) {
     const Index h = side == 0 ? a : b, s = side == 0 ? b : a;
-    if (fadj_[h].cnt <= kOrderedRun || fadj_[s].cnt > kOrderedRun || p == geo_[h].p) continue;
+    if (fadj_[h].cnt <= kOrderedRun || fadj_[s].cnt > kOrderedRun) continue;
     for (const Index* it = faces_begin(s); it != faces_end(s) && !flipped; ++it)
       if (*it != st.fl && *it != st.fr) flipped = turns_over(*it, s, p, n1);
+    if (p == geo_[h].p) continue;  // the hub stays: its own faces keep their normals
     // The hub's fan walked from the edge's faces on, kHubWalk faces each way, through the small vertices
     // of its rim (a face around h across its edge (h, w) is among w's faces).
     auto walk = [&](Index prev, Index w) {
@@ -1237,6 +1337,10 @@ double Analysis::border_deviation(Index a, Index b, const glm::dvec3& p) const {
 void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   // vs takes a's slot; its node id is the next one.
   const Index vs = a;
+  if (lt_) {
+    ++lt_clock_;  // the edges costed from here on see the faces after this collapse
+    lt_hub_parts_before(a, b);
+  }
   const Index na = node_of_[a], nb = node_of_[b];
   const Index fl = st.fl, fr = st.fr, vl = st.vl, vr = st.vr;
   // Kim-Lee orientation: fl = (vt, vu, vl) holds vt->vu. Our fl holds a->b, so vt = a, vu = b.
@@ -1342,6 +1446,7 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
   if (lt_) {  // every face that changed has vs and two of these as corners
     lt_touched(vs);
     for (Index w : ring_) lt_touched(w);
+    lt_update_hubs(vs);  // those whose sums were clean: moved by the difference, clean again
   }
 
   // Candidate edges: the edge of each neighbour w of vs to a (or b) becomes the edge (vs, w), keeping its
@@ -1378,12 +1483,6 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
       VARMESH_ASSERT(pos->edge == e && at >= eadj_[w].off && at < eadj_[w].off + eadj_[w].cnt);
       if (link_[w] == kInvalid) {
         link_[w] = e;
-        // An edge (a, w) refused by the link condition, w no neighbour of b, is refused as (vs, w): its faces
-        // are the same, and the common neighbours of w and vs hold those of w and a. It stays out of the
-        // queue (a hub absorbing its neighbours one by one would try each of its edges again each time).
-        const bool held = link_refused_[e] == kHeldLink && w != vl && w != vr && !heap_.contains(e);
-        set_edge(e, vs, w, !held);
-        if (held) rejected_[vs] = 1;
         epos_[e] = {at, static_cast<Index>(epool_.size() + new_edges_.size())};  // vs's run is appended below
         new_edges_.push_back({e, w});
         pos->to = vs;
@@ -1407,15 +1506,26 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     for (const EdgeRef* e = edges_begin(b); e != edges_end(b); ++e)  // b's run still names its neighbours
       hub_links_.erase(pair_key(b, e->to));
   }
-  if (out_of_[vs] != kInvalid || eadj_[vs].cnt > kHubFaces) {
-    list_out_edges(vs);
-    link_hub(vs);
+  const bool vs_hub = out_of_[vs] != kInvalid || eadj_[vs].cnt > kHubFaces;
+  if (vs_hub) link_hub(vs);
+  // The costs of vs's edges, once the runs and hub_links_ describe the mesh after the collapse (the
+  // Lindstrom-Turk shape term asks whether two of its neighbours are neighbours).
+  // An edge (a, w) refused by the link condition, w no neighbour of b, is refused as (vs, w): its faces are
+  // the same, and the common neighbours of w and vs hold those of w and a. It stays out of the queue (a hub
+  // absorbing its neighbours one by one would try each of its edges again each time).
+  for (const EdgeRef& r : new_edges_) {
+    const bool held = link_refused_[r.edge] == kHeldLink && r.to != vl && r.to != vr && !heap_.contains(r.edge);
+    set_edge(r.edge, vs, r.to, !held);
+    if (held) rejected_[vs] = 1;
   }
+  if (vs_hub) list_out_edges(vs);
   // Lindstrom-Turk costs are memoryless: they read the faces around both ends, and those of every neighbour
-  // of vs just changed. The edges at vs were re-costed above; the others at a neighbour are marked stale
-  // and re-costed when they reach the top of the queue (run(): lazy evaluation), which costs one placement
-  // per pop instead of one per edge of the second ring at every collapse (about 25). A stale edge that had
-  // been rejected comes back into the queue.
+  // of vs just changed. The edges at vs were re-costed above; the others at a neighbour are stale (lt_stale():
+  // the neighbour's clock is stamped here) and re-costed when they reach the top of the queue (run(): lazy
+  // evaluation), which costs one placement per pop instead of one per edge of the second ring at every
+  // collapse (about 25). A stale edge that had been rejected comes back into the queue; a hub's, those of
+  // its list, through rejected_ below (retry_hub_edges(), as with the default cost: an edge refused for a
+  // face turned over waits for a change around its small end).
   // An edge (w, x) refused by the link condition, w a neighbour of vs, is refused again unless x is another
   // neighbour of vs (both ends' faces and common neighbours may have changed), or x is vs and w one of the
   // apexes vl, vr (see above): otherwise its faces, border and common neighbours are as they were. A hub
@@ -1428,14 +1538,16 @@ void Analysis::collapse(Index a, Index b, const Placement& pl, const Step& st) {
     return link_refused_[e.edge] == kHeldLink && (mark_[e.to] != stamp_ || (e.to == vs && w != vl && w != vr));
   };
   if (lt_) {
-    for (Index w : ring_)
+    lt_changed_[vs] = lt_clock_;
+    for (Index w : ring_) {
+      lt_changed_[w] = lt_clock_;
+      if (out_of_[w] != kInvalid) continue;
       for (const EdgeRef* e = edges_begin(w); e != edges_end(w); ++e) {
-        if (e->to == vs) continue;
-        stale_[e->edge] = 1;
-        if (heap_.contains(e->edge)) continue;
+        if (e->to == vs || heap_.contains(e->edge)) continue;
         if (link_holds(w, *e)) rejected_[w] = 1;
         else heap_.push(e->edge, edges_[e->edge].cost, tie_key(edges_[e->edge]));
       }
+    }
   }
 
   ElementBound bound;
@@ -1608,13 +1720,15 @@ void Analysis::init_edges() {
   }
   // Costs once every run is complete: a Lindstrom-Turk cost reads the runs of both ends (the neighbours of
   // its shape term). (Until 2026-11-24 each edge was costed as it joined the runs, so its first cost saw
-  // only the edges numbered before it.)
+  // only the edges numbered before it.) The shape term asks whether two hubs are neighbours: hub_links_
+  // answers that, from the hubs' lists (collapse_loop() takes them again with the queue filled).
+  heap_.grow_ids(edges_.size());
+  if (lt_) init_out_lists();
   for (Edge& e : edges_) {
     const Placement pl = place(e.a, e.b);
     e.cost = pl.cost;
     e.p = kept(pl);
   }
-  heap_.grow_ids(edges_.size());
   for (Index id = 0; id < edges_.size(); ++id) heap_.push_unordered(id, edges_[id].cost, tie_key(edges_[id]));
   heap_.heapify();
 }
@@ -2211,7 +2325,7 @@ void Analysis::init_raw() {
 }
 
 void Analysis::collapse_loop(QemStats& stats) {
-  stale_.assign(lt_ ? edges_.size() : 0, 0);
+  lt_reset_clocks();
   link_refused_.assign(edges_.size(), 0);
   init_out_lists();
   const std::size_t target_v = opt_.target_vertices;
@@ -2264,8 +2378,8 @@ void Analysis::collapse_loop(QemStats& stats) {
     Placement pl = std::isnan(pe.p.x) ? place(a, b) : Placement{pe.p, glm::dvec3(0.0), pe.cost, true};
     // A stale Lindstrom-Turk edge (its neighbourhood changed since it was costed) has just been placed again:
     // if its cost rose above the next edge's, it goes back into the queue with that cost.
-    if (lt_ && stale_[e]) {
-      stale_[e] = 0;
+    if (lt_ && lt_stale(e)) {
+      lt_costed_[e] = lt_clock_;
       edges_[e].cost = pl.cost;
       if (!heap_.empty() && pl.cost > heap_.top_cost()) {
         heap_.push(e, pl.cost, tie_key(edges_[e]));
