@@ -253,6 +253,30 @@ SubdivMesh run_ours(const PolyMesh& poly, int level) {
 
 // ---------------------------------------------------------------- phases
 
+// A position step is a small difference of two larger times, so noise can swamp it: a difference of two
+// medians came out negative with two reps. The difference is taken within each rep instead, where the runs
+// were made back to back, and the median of those per-rep differences is printed. Where that median is not
+// above half the range (max - min) of the per-rep differences, the reps disagree by more than the step
+// itself: the cell says "<noise" with that half range instead of a number. With two reps this flags
+// exactly the steps that one rep measured as zero or negative; with one rep, a step of zero or less.
+struct StepTime {
+  double ms = 0;     // median of the per-rep differences
+  double noise = 0;  // half the range of the per-rep differences
+  bool swamped() const { return ms <= noise; }
+};
+
+StepTime step_time(const std::vector<double>& per_rep) {
+  const auto [lo, hi] = std::minmax_element(per_rep.begin(), per_rep.end());
+  return {median(per_rep), (*hi - *lo) / 2};
+}
+
+std::string step_cell(const StepTime& t) {
+  char buf[32];
+  if (t.swamped()) std::snprintf(buf, sizeof buf, "<noise %.2f", t.noise);
+  else std::snprintf(buf, sizeof buf, "%.2f", t.ms);
+  return buf;
+}
+
 // Where varmesh's time goes, from public functions only (subdivide's position steps run in place inside
 // the library and are not callable alone): make_subdiv_topology and refine_subdiv_topology level by level
 // are timed directly; the position steps are the marginal cost of one more binary step of subdivide()
@@ -292,30 +316,46 @@ void phases(const PolyMesh& poly, int level, int reps) {
     }
     t_whole.push_back(cpu_ms() - a);
   }
+  // Per rep r: A = T(2l + 1) - T(2l), B = T(2l + 2) - T(2l + 1) - refine, and their totals over the levels.
+  const auto r_count = static_cast<std::size_t>(reps);
+  std::vector<double> tot_a(r_count, 0.0), tot_b(r_count, 0.0), tot_r(r_count, 0.0), tot_sum(r_count, 0.0);
   std::printf("\nphases: varmesh, median of %d in-process reps (thread CPU ms)\n", reps);
   std::printf("  subdivide(%d steps, keep_last_edges=false), whole  %8.2f\n", steps, median(t_whole));
   std::printf("  make_subdiv_topology (validate + edge hash map)    %8.2f\n", median(t_topo));
-  std::printf("  %-6s %14s %14s %16s %12s\n", "level", "A (diag) step", "B (edge) step", "refine (edges)",
-              "sum");
-  double sa = 0, sb = 0, sr = 0;
+  std::printf("  A = T(2l+1) - T(2l), B = T(2l+2) - T(2l+1) - refine, sum = T(2l+2) - T(2l), T(s) = subdivide(s steps):\n"
+              "  differences taken within each rep, then the median over reps; \"<noise N\" where that median is\n"
+              "  not above N, half the range of the per-rep differences (the reps disagree by more than the step)\n");
+  std::printf("  %-6s %14s %14s %16s %14s\n", "level", "A (diag) step", "B (edge) step", "refine (edges)", "sum");
   for (int l = 0; l < level; ++l) {
-    const double ta = median(t_upto[2 * l + 1]) - median(t_upto[2 * l]);
-    const double tr = median(t_refine[l]);
-    const double tb = median(t_upto[2 * l + 2]) - median(t_upto[2 * l + 1]) - tr;
-    sa += ta;
-    sb += tb;
-    sr += tr;
-    std::printf("  %d->%d   %14.2f %14.2f %16.2f %12.2f\n", l, l + 1, ta, tb, tr, ta + tb + tr);
+    std::vector<double> da(r_count), db(r_count), dsum(r_count);
+    for (std::size_t r = 0; r < r_count; ++r) {
+      da[r] = t_upto[2 * l + 1][r] - t_upto[2 * l][r];
+      db[r] = t_upto[2 * l + 2][r] - t_upto[2 * l + 1][r] - t_refine[l][r];
+      dsum[r] = t_upto[2 * l + 2][r] - t_upto[2 * l][r];
+      tot_a[r] += da[r];
+      tot_b[r] += db[r];
+      tot_r[r] += t_refine[l][r];
+      tot_sum[r] += dsum[r];
+    }
+    std::printf("  %d->%d   %14s %14s %16.2f %14s\n", l, l + 1, step_cell(step_time(da)).c_str(),
+                step_cell(step_time(db)).c_str(), median(t_refine[l]), step_cell(step_time(dsum)).c_str());
   }
-  std::printf("  total  %14.2f %14.2f %16.2f %12.2f\n", sa, sb, sr, sa + sb + sr);
+  const StepTime sa = step_time(tot_a), sb = step_time(tot_b);
+  std::vector<double> tot_ab(r_count);
+  for (std::size_t r = 0; r < r_count; ++r) tot_ab[r] = tot_a[r] + tot_b[r];
+  const StepTime sab = step_time(tot_ab);
+  std::printf("  total  %14s %14s %16.2f %14s\n", step_cell(sa).c_str(), step_cell(sb).c_str(), median(tot_r),
+              step_cell(step_time(tot_sum)).c_str());
   std::printf("  last refine without edges (what subdivide does)    %8.2f\n", median(t_last_refine_noedges));
   {
     double early = 0;
     for (int l = 0; l + 1 < level; ++l) early += median(t_refine[l]);
     const double last = median(t_last_refine_noedges), topo0 = median(t_topo), whole = median(t_whole);
+    // The sum adds the position steps' median even when it is flagged: it is the only estimate there is.
     std::printf("  => subdivide = level-0 topology %.1f + refines with edges (levels 1..%d) %.1f + last refine %.1f + "
-                "position steps %.1f (A %.1f, B %.1f) = %.1f (measured whole: %.1f)\n",
-                topo0, level - 1, early, last, sa + sb, sa, sb, topo0 + early + last + sa + sb, whole);
+                "position steps %s (A %s, B %s) = %.1f (measured whole: %.1f)\n",
+                topo0, level - 1, early, last, step_cell(sab).c_str(), step_cell(sa).c_str(), step_cell(sb).c_str(),
+                topo0 + early + last + sab.ms, whole);
   }
 
   // Live bytes during the last refine (the peak): parent level with edges, child without, positions
