@@ -25,9 +25,22 @@ constexpr float kPi = 3.14159265f;
 // flips only when theta + alpha + beta crosses 90 degrees; cos is 1-Lipschitz, so that sum is at least
 // |cos(theta) - sin(alpha + beta)| away from it (and at least |cos(alpha + beta)| when alpha + beta >= 90,
 // which must first drop below 90). Moving the eye by delta <= h = (dist - r) / 2 turns c - eye by at most
-// asin(delta / dist) <= (pi / 2) delta / dist and changes beta by at most delta times the largest
-// |d beta / d dist| = r / (D sqrt(D^2 - r^2)) on [dist - h, dist + h], at D = (dist + r) / 2; since
-// D^2 - r^2 = (dist - r)(dist + 3r) / 4 >= h^2, r / (D h) bounds it without a second square root.
+// asin(delta / dist) (the half-angle under which c sees the ball of radius delta around the eye), and
+// asin(x) <= (pi / 2) x on [0, 1] (asin is convex there, asin(1) = pi / 2). It changes beta by at most
+// delta times the largest |d beta / d dist| = r / (D sqrt(D^2 - r^2)) on [dist - h, dist + h], at
+// D = (dist + r) / 2; since D^2 - r^2 = (dist - r)(dist + 3r) / 4 >= h^2, r / (D h) bounds it without a second
+// square root. Both |cos(theta) - sin(alpha + beta)| and cos(alpha + beta) have partial derivatives of at most
+// 1 in theta and beta, so they too move by at most that rate times delta: at the moved eye the decision is
+// still as far from its boundary as the slack below.
+//
+// The slack covers rounding, in units of cos(theta) - sin(alpha + beta), both in the margin's own cos_theta,
+// sin_sum and cos_sum and in entirely_facing()'s squared form at the moved eye. cos_half_angle^2 rounds by up
+// to 2^-25 near 1, which moves sin(alpha) and the squared form's verdict by up to about 8e-7 each (worst
+// near alpha = 1 degree); the other terms are a few float epsilons, except with the eye just outside the
+// sphere, where cos(beta) = sqrt(1 - (r / dist)^2), cos^2(alpha) dist^2 > r^2 and dist^2 - r^2 lose a few
+// epsilons divided by cos(beta) (measured: float decisions wrong up to 5e-8 / cos(beta) from the boundary).
+// Hence 1e-5 / cos(beta). A fixed 1e-5 is not enough there: d = c - eye jumps to a neighbouring float under
+// eye moves far smaller than any margin, and answers flipped (test FacingMarginsHoldForWorstCaseMoves).
 //
 // The same decision without any square root (for is_fine, which runs for every candidate of every frame).
 // alpha + beta < 90 is cos(alpha) > sin(beta), i.e. cos^2(alpha) dist^2 > r^2; and
@@ -74,9 +87,9 @@ bool facing(const ElementBound& b, const glm::vec3& eye, float sign, float& marg
   const float cos_theta = along / dist;
   const float sin_sum = sa * cb + cac * sb;  // sin(alpha + beta)
   const bool angle_form = cos_sum > 0.0f && cos_theta > sin_sum;
-  const float angle = (cos_sum > 0.0f ? std::fabs(cos_theta - sin_sum) : -cos_sum) - 1e-5f;
+  const float angle = (cos_sum > 0.0f ? std::fabs(cos_theta - sin_sum) : -cos_sum) - 1e-5f / cb;  // cb = 0: -inf
   const float h = 0.5f * (dist - b.radius), dd = 0.5f * (dist + b.radius);
-  const float rate = kPi / dist + b.radius / std::max(1e-30f, dd * h);
+  const float rate = 0.5f * kPi / dist + b.radius / std::max(1e-30f, dd * h);
   margin = angle > 0.0f && angle_form == result ? std::min(h, angle / rate) : 0.0f;
   return result;
 }

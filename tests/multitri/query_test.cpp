@@ -1065,6 +1065,117 @@ TEST(QueryCoherence, MarginsAreConservative) {
                    .motion_to(Criterion::away_from_points({{0, 0, 1}}, 1.0f), {}, turn, shift));
 }
 
+// The back-facing margin where it is tightest, checked through back_facing() and away_from_silhouette():
+// tilt + half-angle + angular radius near 90 degrees; cones from nearly a ray (cos_half_angle a few ulps
+// below 1) to nearly a half-space, and full ones; spheres of radius 0 to large, seen from far and from just
+// outside. The eye moves by exactly the margin and by less, along c - eye (the distance, hence the angular
+// radius, changes fastest) and perpendicular to it (c - eye turns fastest; in the plane of the axis the tilt
+// changes fastest). A turn rate below 1 / dist, e.g. (pi / 4) / dist, fails here. The last kind of trial puts
+// the eye just outside the sphere and near the origin at half an ulp of the centre's coordinates, where
+// moves far below any margin carry c - eye to the neighbouring floats: the rounding of the decision grows
+// like 1 / cos(beta) there, and a slack that ignores this fails.
+TEST(QueryCoherence, FacingMarginsHoldForWorstCaseMoves) {
+  constexpr float kHalfPi = 1.5707963f;
+  std::mt19937 rng(2024);
+  auto power_of_ten = [&rng](float lo, float hi) { return std::pow(10.0f, uniform(rng, lo, hi)); };
+  std::size_t positive = 0, checked = 0, beyond = 0;
+  for (int trial = 0; trial < 80000; ++trial) {
+    const int kind = trial % 4;  // eye far, near, just outside the sphere, at a rounding boundary
+    ElementBound b;
+    glm::vec3 eye(0.0f);
+    glm::vec3 half_ulp(0.0f);
+    if (kind == 3) {
+      b.radius = uniform(rng, 0.5f, 1.0f);
+      b.center = random_unit(rng) * (b.radius * (1.0f + power_of_ten(-7.0f, -1.0f)));
+      if (std::fabs(b.center.x) < 0.05f || std::fabs(b.center.y) < 0.05f || std::fabs(b.center.z) < 0.05f) continue;
+      for (int i = 0; i < 3; ++i) {
+        const float a = std::fabs(b.center[i]);
+        half_ulp[i] = std::copysign(0.5f * (std::nextafter(a, 2.0f * a) - a), b.center[i]);
+      }
+    } else {
+      const float scale = power_of_ten(-3.0f, 3.0f);
+      b.center = glm::vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)) * scale *
+                 (trial % 7 == 0 ? 1000.0f : 1.0f);
+      b.radius = trial % 5 == 0 ? 0.0f : scale * power_of_ten(-6.0f, 0.0f);
+      const float dist = kind == 0   ? b.radius + scale * power_of_ten(-3.0f, 2.0f)
+                         : kind == 1 ? b.radius + scale * uniform(rng, 0.0f, 3.0f)
+                                     : b.radius * (1.0f + power_of_ten(-7.0f, -1.0f));
+      eye = b.center - random_unit(rng) * dist;
+    }
+    // Eyes at the rounding boundary: each coordinate half an ulp of the centre's, less or more by 1e-5 of it.
+    auto boundary_eye = [&half_ulp](unsigned mask) {
+      glm::vec3 e;
+      for (int i = 0; i < 3; ++i) e[i] = half_ulp[i] * ((mask >> i & 1u) ? 1.00001f : 0.99999f);
+      return e;
+    };
+    if (kind == 3) eye = boundary_eye(static_cast<unsigned>(rng() % 8));
+    const glm::vec3 d = b.center - eye;
+    const float dist = glm::length(d);
+    if (!(dist > b.radius)) continue;
+    const glm::vec3 w = d / dist;
+    const float beta = std::asin(std::min(1.0f, b.radius / dist));
+    // The cone: tilt + half-angle + beta near 90 degrees, or anywhere.
+    float alpha = 0.0f, tilt = 0.0f;
+    const int shape = (trial / 4) % 4;
+    if (kind == 3) {
+      alpha = std::max(0.0f, kHalfPi - beta + uniform(rng, -1, 1) * power_of_ten(-6.0f, -2.0f));
+      tilt = uniform(rng, 0.0f, 1.0f) * power_of_ten(-7.0f, -1.0f);
+    } else {
+      alpha = shape == 0 ? power_of_ten(-5.0f, -1.0f) : shape == 1 ? kHalfPi - power_of_ten(-5.0f, -1.0f)
+                                                                   : uniform(rng, 0.0f, kHalfPi);
+      const float off = trial % 3 == 0 ? uniform(rng, -1, 1) : (rng() & 1u ? 1.0f : -1.0f) * power_of_ten(-7.0f, -1.0f);
+      tilt = std::clamp(kHalfPi - alpha - beta + off, 0.0f, 3.1415926f);
+    }
+    b.cone.axis = tilted(w, tilt, rng);
+    b.cone.cos_half_angle = std::cos(alpha);
+    if (kind != 3 && shape == 3)  // a few ulps below 1 (cos_half_angle^2 rounds worst near 1)
+      b.cone.cos_half_angle = 1.0f - std::ldexp(float(1 + rng() % 3), -static_cast<int>(1 + rng() % 24));
+    if (trial % 97 == 0) b.cone = NormalCone{};  // full: never fine, margin infinite
+    if (trial % 8 == 5) b.cone.axis = -b.cone.axis;  // the front-facing side for the silhouette
+
+    // Directions: along c - eye, perpendicular in the plane of the axis (both ways), out of that plane, random.
+    glm::vec3 in_plane = glm::cross(glm::cross(w, b.cone.axis), w);
+    in_plane = glm::length(in_plane) > 1e-6f ? glm::normalize(in_plane) : tilted(w, kHalfPi, rng);
+    const glm::vec3 dirs[] = {w, -w, in_plane, -in_plane, glm::normalize(glm::cross(w, in_plane)), random_unit(rng)};
+    for (int which = 0; which < 2; ++which) {
+      const Criterion c = which == 0 ? Criterion::back_facing(eye) : Criterion::away_from_silhouette(eye);
+      float margin = -1.0f;
+      const bool fine = c.is_fine_with_margin(b, margin);
+      ASSERT_EQ(fine, c.is_fine(b)) << "trial " << trial;
+      ASSERT_GE(margin, 0.0f);
+      if (!(margin > 0.0f)) continue;
+      ++positive;
+      auto expect_kept = [&](const glm::vec3& moved) {
+        if (glm::length(glm::dvec3(moved) - glm::dvec3(eye)) > double(margin)) return;  // rounded beyond
+        ++checked;
+        const Criterion cm = which == 0 ? Criterion::back_facing(moved) : Criterion::away_from_silhouette(moved);
+        EXPECT_EQ(cm.is_fine(b), fine) << "trial " << trial << " kind " << kind << ": margin " << margin
+                                       << " but a move of " << glm::length(moved - eye) << " changed the answer";
+      };
+      if (kind == 3) {
+        for (unsigned mask = 0; mask < 8; ++mask) expect_kept(boundary_eye(mask));
+        continue;
+      }
+      const float step = std::isinf(margin) ? 1000.0f * dist : margin;
+      for (const glm::vec3& v : dirs) {
+        expect_kept(eye + v * step);
+        expect_kept(eye + v * (step * uniform(rng, 0.0f, 1.0f)));
+      }
+      // The margins are not so small that no decision is near: 4 times as far, some answers change.
+      if (!std::isinf(margin)) {
+        for (const glm::vec3& v : {in_plane, -in_plane, w, -w}) {
+          const glm::vec3 moved = eye + v * (4.0f * margin);
+          const Criterion cm = which == 0 ? Criterion::back_facing(moved) : Criterion::away_from_silhouette(moved);
+          beyond += cm.is_fine(b) != fine;
+        }
+      }
+    }
+  }
+  EXPECT_GT(positive, 60000u);
+  EXPECT_GT(checked, 600000u);
+  EXPECT_GT(beyond, 10000u);
+}
+
 // update() with coherence returns exactly extract()'s front along camera paths (small steps, jumps,
 // changed criteria, budgets and focus sets in between), and reuses answers on small steps.
 TEST(QueryCoherence, UpdateWithCoherenceEqualsExtract) {
