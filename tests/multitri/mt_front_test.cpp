@@ -421,7 +421,9 @@ TEST(MtFront, ManyFrontsShareOneMt) {
   b.validate();
   a.validate();
   MtFront c = a;  // a copy is an independent state
+  EXPECT_EQ(applied_set(c), applied_set(a));
   c.reset();
+  EXPECT_EQ(c.num_applied(), 1u);
   EXPECT_GT(a.num_applied(), 1u);
   a.validate();
   c.validate();

@@ -362,6 +362,8 @@ TEST(MtIo, EditedFacesBehindAValidChecksumGiveConformingFronts) {
           }
         }
   EXPECT_GT(refused, 0u);
+  // Some edits pass the reader (47 of 492 when written), or the fronts above check nothing.
+  EXPECT_GT(accepted, 0u);
   std::printf("edited files: %zu refused, %zu accepted\n", refused, accepted);
 }
 

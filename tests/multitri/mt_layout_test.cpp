@@ -66,9 +66,12 @@ TEST(MtLayout, CreatorParentsAndChildrenMatchTheirDefinitions) {
       const std::vector<NodeId> got_p(mt.parents(n).begin(), mt.parents(n).end());
       std::vector<NodeId> got_c(mt.children(n).begin(), mt.children(n).end());
       EXPECT_EQ(got_p, want_p) << "node " << n << ": parents are the distinct creators, in increasing order";
-      EXPECT_EQ(got_p.size(), mt.parents(n).size());
-      EXPECT_EQ(got_c.size(), mt.children(n).size());
-      EXPECT_EQ(mt.children(n).empty(), want_c.empty());
+      // size(), empty() and front() answer for the definitions too, not only for the ranges' own walks.
+      EXPECT_EQ(mt.parents(n).size(), want_p.size()) << "node " << n;
+      EXPECT_EQ(mt.children(n).size(), want_c.size()) << "node " << n;
+      EXPECT_EQ(mt.parents(n).empty(), want_p.empty()) << "node " << n;
+      EXPECT_EQ(mt.children(n).empty(), want_c.empty()) << "node " << n;
+      if (!want_p.empty()) { EXPECT_EQ(mt.parents(n).front(), want_p.front()) << "node " << n; }
       std::sort(got_c.begin(), got_c.end());
       EXPECT_EQ(got_c, want_c) << "node " << n << ": children are the distinct destroyers, each once";
       with_two_parents += want_p.size() >= 2;

@@ -64,7 +64,7 @@ TEST(Mt, SplitNodeBuildsAndValidates) {
     EXPECT_LE(glm::length(mt.position(v) - mt.bound(1).center), mt.bound(1).radius);
 }
 
-TEST(Mt, SwapNodeIsAccepted) {
+TEST(Mt, FacesThatNoNodeCreatesAreRefused) {
   Square s;
   const FaceId a = s.b.add_face(s.v0, s.v1, s.v3), b2 = s.b.add_face(s.v1, s.v2, s.v3);
   const FaceId removed[] = {s.t0, s.t1}, created[] = {a, b2};

@@ -369,7 +369,7 @@ TEST(QueryUpdate, EqualsExtractFromEarlierFronts) {
   std::mt19937 rng(123);
   MtFront moving(mt);
   MtFront shuffled_state(mt);
-  int budget_hits = 0, moved_both_ways = 0;
+  int budget_hits = 0, moved_both_ways = 0, started_elsewhere = 0;
   for (int iter = 0; iter < 160; ++iter) {
     const Family family = static_cast<Family>(rng() % static_cast<unsigned>(Family::kCount));
     Query q = make_query(family, rng, 3.0f);
@@ -404,16 +404,18 @@ TEST(QueryUpdate, EqualsExtractFromEarlierFronts) {
       EXPECT_EQ(sx.budget_reached, stopped);
       budget_hits += stopped ? 1 : 0;
     }
-    (void)before;
+    started_elsewhere += before != expected;
   }
   EXPECT_GT(budget_hits, 10);
   EXPECT_GT(moved_both_ways, 10);
+  EXPECT_GT(started_elsewhere, 120) << "update() should mostly start from a front other than its answer";
 }
 
 TEST(QueryBudget, ExtractIsTheLargestPrefixOfThePriorityOrderThatFits) {
   const GridMt g = terrain_mt(3, 6, 41, 0.2);
   const Mt& mt = g.mt;
   std::mt19937 rng(5);
+  int cut = 0;
   for (int trial = 0; trial < 40; ++trial) {
     const Family family = static_cast<Family>(trial % static_cast<int>(Family::kCount));
     Query q = make_query(family, rng, 3.0f);
@@ -437,6 +439,7 @@ TEST(QueryBudget, ExtractIsTheLargestPrefixOfThePriorityOrderThatFits) {
       const auto expected = reference_budget(mt, q, &stopped);
       EXPECT_EQ(applied_set(f), expected);
       EXPECT_EQ(st.budget_reached, stopped);
+      cut += st.budget_reached ? 1 : 0;
       if (budget == full.num_faces()) {
         EXPECT_EQ(applied_set(f), all);
         EXPECT_FALSE(st.budget_reached);
@@ -447,6 +450,7 @@ TEST(QueryBudget, ExtractIsTheLargestPrefixOfThePriorityOrderThatFits) {
       EXPECT_EQ(applied_set(f2), expected);
     }
   }
+  EXPECT_GT(cut, 120) << "most budgets below the unbudgeted answer should stop the refinement";
 }
 
 TEST(QueryBudget, TiesAreBrokenBySmallerTieKeyInExtractAndUpdate) {
