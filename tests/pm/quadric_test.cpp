@@ -247,8 +247,20 @@ TEST(QuadricAttributeTest, FanOptimumReproducesSharedVertex) {
     }
     AttributeQuadric q;
     for (int k = 0; k < kSides; ++k) q += AttributeQuadric::from_triangle(top, ring[k], ring[(k + 1) % kSides]);
-    // Sums and scalings act on the entries; A stays symmetric.
-    EXPECT_DOUBLE_EQ(q.entry(1, 4), q.entry(4, 1));
+    // entry(i, j) is the A of Q(x) = x.A.x + 2 b.x + c that evaluate() computes: the mixed second difference
+    // Q(p + ei + ej) - Q(p + ei) - Q(p + ej) + Q(p) of a quadratic is exactly 2 A(i, j) (i == j included).
+    auto shifted = [](AttributePoint x, int k, double by) {
+      (k < 3 ? x.position : x.color)[k % 3] += by;
+      return x;
+    };
+    const AttributePoint& p = ring[0];
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) {
+        const AttributePoint pi = shifted(p, i, 1.0), pj = shifted(p, j, 1.0), pij = shifted(pi, j, 1.0);
+        const double diff = q.evaluate(pij) - q.evaluate(pi) - q.evaluate(pj) + q.evaluate(p);
+        EXPECT_NEAR(q.entry(i, j), 0.5 * diff, 1e-9 * (1.0 + q.evaluate(pij))) << i << ", " << j;
+      }
+    // Sums and scalings act on the entries.
     EXPECT_NEAR(q.scaled(2).evaluate(ring[0]), 2 * q.evaluate(ring[0]), 1e-12 * (1 + q.evaluate(ring[0])));
 
     const AttributeOptimum o = q.optimal(std::span<const AttributePoint>(ring));
