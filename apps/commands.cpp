@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <exception>
 #include <cctype>
+#include <csignal>
 #include <filesystem>
 #include <functional>
 #include <limits>
@@ -738,6 +739,10 @@ int cmd_render(const RenderArgs& a) {
 }  // namespace
 
 int run(int argc, char** argv) {
+  // A file-size limit (ulimit -f) would kill the process with SIGXFSZ in the middle of a write, leaving the
+  // staged temporary file behind. Ignored, the write fails with EFBIG instead, like a full disk: the writer
+  // removes what it staged and the error names the file.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"varmesh: variable-resolution triangle meshes (Multi-Triangulations, 4-k meshes, progressive meshes)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "varmesh 0.1.0");

@@ -1060,5 +1060,28 @@ TEST(Robustness, OutOfMemoryIsSaid) {
 #endif
 }
 
+// A file-size limit (ulimit -f) killed the command with SIGXFSZ in the middle of a write: the staged
+// ".tmp.<name>.<n>" file stayed beside the output. The command ignores the signal, so the write fails
+// with EFBIG like any failed write: one line naming the file, the staged file removed, the old file kept.
+// (The other runs under a file limit, run_limited, ignore the signal in the shell first.)
+TEST(Robustness, AFileSizeLimitLeavesNoStagedFile) {
+  const auto dir = testing::scratch_dir("robust_file_size_limit");
+  std::ofstream(dir / "a.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const fs::path out = dir / "out" / "big.obj";
+  fs::create_directories(out.parent_path());
+  std::ofstream(out) << "keep\n";
+  const fs::path err = dir / "stderr.txt";
+  const std::string cmd = "sh -c \"ulimit -f 4; " + std::string(VARMESH_EXE) + " subdiv " + (dir / "a.obj").string() +
+                          " --levels 4 -o " + out.string() + "\" >/dev/null 2>" + err.string();
+  const int raw = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(raw)) << "killed by signal " << (WIFSIGNALED(raw) ? WTERMSIG(raw) : 0);
+  const std::string text = testing::slurp(err);
+  EXPECT_EQ(WEXITSTATUS(raw), 1) << text;
+  EXPECT_EQ(count_lines(text), 1) << text;
+  EXPECT_TRUE(contains(text, out.string())) << text;
+  EXPECT_EQ(testing::slurp(out), "keep\n");
+  EXPECT_EQ(staging_leftovers(out.parent_path()), std::vector<std::string>{});
+}
+
 }  // namespace
 }  // namespace varmesh
