@@ -55,6 +55,7 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
                  "semiregular: refuse, before the build, a hierarchy whose finest mesh would have more faces than "
                  "this (base faces x 2^levels; default 2^22 = 4194304, about 1 GB and 10 s; at most 2^31)")
       ->option_text("N")
+      ->check(check_count)  // CLI11 took -1 for 2^64 - 1 and printed that back
       ->each([&a](const std::string&) { a.max_triangles_given = true; });
   auto* pictures = sub.add_option("--pictures", a.pictures, "write PNGs of the levels (or of the adaptive result) into this folder")
                        ->check(check_file_name);

@@ -409,7 +409,7 @@ void check_output_paths(const SubdivArgs& a) {
 
 void check_limits(const SubdivArgs& a) {
   if (a.max_triangles == 0 || a.max_triangles > SubdivArgs::kHardMaxTriangles)
-    throw InvalidInput("subdiv: --max-triangles must be in 1 .. 2^31");
+    throw InvalidInput("subdiv: --max-triangles must be in 1 .. 2^31, not " + std::to_string(a.max_triangles));
 }
 
 int run_figure(const SubdivArgs& a) {
@@ -518,7 +518,9 @@ void add_subdiv_options(CLI::App& sub, SubdivArgs& a) {
   sub.add_option("--up", a.up, "pictures: x,y,z up axis (default 0,0,1)")->check(check_not_empty);
   sub.add_option("--max-triangles", a.max_triangles,
                  "refuse results with more triangles or vertices, checked before running (default 2^25, about 2.7 GB "
-                 "at the peak; at most 2^31); --adaptive stores every level: it refuses 8 times fewer");
+                 "at the peak; at most 2^31); --adaptive stores every level: it refuses 8 times fewer")
+      ->option_text("N")
+      ->check(check_count);  // CLI11 took -1 for 2^64 - 1
 }
 
 int run_subdiv(const SubdivArgs& a) {

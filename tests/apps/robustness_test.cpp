@@ -1083,5 +1083,27 @@ TEST(Robustness, AFileSizeLimitLeavesNoStagedFile) {
   EXPECT_EQ(staging_leftovers(out.parent_path()), std::vector<std::string>{});
 }
 
+// --max-triangles -1 was wrapped to 2^64 - 1 by the parser: build said "must be in 1 .. 2^31, not
+// 18446744073709551615", a number the user never typed, and subdiv named no value at all.
+TEST(Robustness, MaxTrianglesNamesTheValueGiven) {
+  const auto dir = testing::scratch_dir("robust_max_triangles_value");
+  std::ofstream(dir / "a.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const std::string a = (dir / "a.obj").string();
+  const std::string build = "build " + a + " -o " + (dir / "h.vrm").string() + " --quiet";
+  const std::string subdiv = "subdiv " + a + " --levels 1 -o " + (dir / "s.obj").string();
+  for (const std::string& command : {build, subdiv}) {
+    for (const std::string value : {"-1", "99999999999999999999999", "1.5", "0", "4294967296"}) {
+      const CmdResult r = run(command + " --max-triangles " + value, dir);
+      EXPECT_EQ(r.status, 1) << command << " " << value << "\n" << r.err;
+      EXPECT_EQ(count_lines(r.err), 1) << r.err;
+      EXPECT_TRUE(contains(r.err, "--max-triangles")) << r.err;
+      EXPECT_TRUE(contains(r.err, value)) << command << " " << value << "\n" << r.err;
+      EXPECT_FALSE(contains(r.err, "18446744073709551615")) << r.err;
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "h.vrm"));
+  EXPECT_FALSE(fs::exists(dir / "s.obj"));
+}
+
 }  // namespace
 }  // namespace varmesh
