@@ -27,6 +27,10 @@ namespace varmesh::app {
 /// Parses comma-separated numbers; throws InvalidInput naming the option on a bad list or count.
 std::vector<float> parse_floats(const std::string& text, const std::string& option, std::size_t count);
 glm::vec3 parse_vec3(const std::string& text, const std::string& option);
+/// A direction "x,y,z" (--up, --view) as a unit vector, normalized in double so that any finite non-zero
+/// input is one (3e19,0,0 squares past float's range; 1e-30,0,0 squares to zero in float). Throws
+/// InvalidInput "<option>: the direction is zero" for 0,0,0, and as parse_floats.
+glm::vec3 parse_direction(const std::string& text, const std::string& option);
 
 /// The criteria of `--error E` (given unless negative, so that NaN is rejected rather than taken for "not
 /// given"; object units) and `--camera ex,ey,ez,tx,ty,tz,fov` (non-empty: frustum, back faces and `pixels` of

@@ -61,6 +61,13 @@ glm::vec3 parse_vec3(const std::string& text, const std::string& option) {
   return {v[0], v[1], v[2]};
 }
 
+glm::vec3 parse_direction(const std::string& text, const std::string& option) {
+  const glm::dvec3 v(parse_vec3(text, option));
+  const double length = glm::length(v);
+  if (!(length > 0.0)) throw InvalidInput(option + ": the direction is zero");
+  return glm::vec3(v / length);
+}
+
 void add_error_and_camera_criteria(float error, const std::string& camera, float pixels, float viewport,
                                    std::vector<Criterion>& parts) {
   if (!(error < 0.0f)) {  // NaN counts as given: it must not pass for "no --error"
@@ -307,8 +314,8 @@ bool path_within(const std::string& inner, const std::string& outer) {
 }
 
 void check_picture_axes(const std::string& up, const std::string& view) {
-  if (!up.empty() && !(glm::length(parse_vec3(up, "--up")) > 0.0f)) throw InvalidInput("--up: the direction is zero");
-  if (!view.empty() && !(glm::length(parse_vec3(view, "--view")) > 0.0f)) throw InvalidInput("--view: the direction is zero");
+  if (!up.empty()) parse_direction(up, "--up");
+  if (!view.empty()) parse_direction(view, "--view");
 }
 
 namespace {
@@ -674,13 +681,13 @@ int cmd_render(const RenderArgs& a) {
   check_picture_axes(a.up, a.view);
   // CLI11's range check lets NaN through.
   if (!(a.fov >= 1.0f && a.fov <= 170.0f)) throw InvalidInput("--fov must be a number in [1, 170]");
-  const glm::vec3 up = a.up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_vec3(a.up, "--up");
+  const glm::vec3 up = a.up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_direction(a.up, "--up");
   const TriMesh mesh = read_input_mesh(a.input);
   const float aspect = float(a.width) / float(a.height);
   // The default 3/4 view, or (--up, --view) the framing of query's and subdiv's pictures.
   Camera cam = a.up.empty() && a.view.empty()
                    ? default_camera_for(mesh, aspect)
-                   : picture_camera_for(mesh, up, a.view.empty() ? glm::vec3(0.0f) : parse_vec3(a.view, "--view"), aspect);
+                   : picture_camera_for(mesh, up, a.view.empty() ? glm::vec3(0.0f) : parse_direction(a.view, "--view"), aspect);
   if (a.eye.empty()) {
     // The framing is kept under --fov: the eye moves along the view so that the picture holds the same.
     const double grow = std::tan(glm::radians(0.5 * double(cam.fov_y_deg))) / std::tan(glm::radians(0.5 * double(a.fov)));

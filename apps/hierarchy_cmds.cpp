@@ -293,9 +293,8 @@ bool hierarchy_info(const std::string& path) {
 // The pictures' camera: the default 3/4 view, or picture_camera_for when --up or --view is given.
 Camera chosen_camera(const TriMesh& reference, const std::string& up, const std::string& view) {
   if (up.empty() && view.empty()) return default_camera_for(reference, 4.0f / 3.0f);
-  const glm::vec3 u = up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_vec3(up, "--up");
-  const glm::vec3 v = view.empty() ? glm::vec3(0.0f) : parse_vec3(view, "--view");
-  if (!view.empty() && !(glm::length(v) > 0.0f)) throw InvalidInput("--view: the direction is zero");
+  const glm::vec3 u = up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_direction(up, "--up");
+  const glm::vec3 v = view.empty() ? glm::vec3(0.0f) : parse_direction(view, "--view");
   return picture_camera_for(reference, u, v, 4.0f / 3.0f);
 }
 

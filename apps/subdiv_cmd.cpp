@@ -334,9 +334,8 @@ Criterion adaptive_criterion(const SubdivArgs& a) {
 // from `--view` (default: the 3/4 view from above of default_camera_for, around `--up`) and stands as
 // close as it can with every vertex inside the frame.
 Camera picture_camera(const TriMesh& reference, const SubdivArgs& a, float aspect) {
-  const glm::vec3 up = a.up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_vec3(a.up, "--up");
-  const glm::vec3 to_eye = a.view.empty() ? glm::vec3(0.0f) : parse_vec3(a.view, "--view");
-  if (!a.view.empty() && !(glm::length(to_eye) > 0.0f)) throw InvalidInput("--view: the direction is zero");
+  const glm::vec3 up = a.up.empty() ? glm::vec3(0.0f, 0.0f, 1.0f) : parse_direction(a.up, "--up");
+  const glm::vec3 to_eye = a.view.empty() ? glm::vec3(0.0f) : parse_direction(a.view, "--view");
   return picture_camera_for(reference, up, to_eye, aspect);
 }
 

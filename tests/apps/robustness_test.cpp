@@ -1083,6 +1083,46 @@ TEST(Robustness, AFileSizeLimitLeavesNoStagedFile) {
   EXPECT_EQ(staging_leftovers(out.parent_path()), std::vector<std::string>{});
 }
 
+// A --view or --up given with large components (3e19: its squared length overflows float) is a direction
+// like any other; it was taken for zero by the camera framing, which said "frame_sphere: the centre is not
+// finite or the view direction is zero", and build --pictures said so after the whole build.
+TEST(Robustness, PictureDirectionsOfAnySizeFrameTheModel) {
+  const auto dir = testing::scratch_dir("robust_picture_direction_size");
+  std::ofstream(dir / "a.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\n"
+                                  "f 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\nf 1 4 3\nf 1 3 2\n";
+  const std::string a = (dir / "a.obj").string(), out = (dir / "out.obj").string(), png = (dir / "p.png").string();
+  CmdResult r = run("pm build " + a + " --quiet -o " + (dir / "h.vmh").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> commands = {
+      "render " + a + " -o " + png,
+      "pm query " + (dir / "h.vmh").string() + " --error 0 -o " + out + " --png " + png,
+      "subdiv " + a + " --levels 1 -o " + out + " --png " + png,
+      "build " + a + " --quiet --levels 1 -o " + (dir / "h.vrm").string() + " --pictures " + (dir / "pics").string(),
+  };
+  const std::vector<std::string> axes_given = {" --view 3e19,0,0", " --view 1e30,1e30,1e30",
+                                               " --view 1e-30,0,0 --up 0,1e-30,0", " --up 0,3e19,0 --view 0,0,1"};
+  for (const std::string& axes : axes_given) {
+    for (const std::string& command : commands) {
+      fs::remove_all(dir / "pics");
+      fs::remove(png);
+      r = run(command + axes, dir);
+      EXPECT_EQ(r.status, 0) << command + axes << "\n" << r.err;
+      EXPECT_FALSE(contains(r.err, "frame_sphere")) << command + axes << "\n" << r.err;
+      const std::string picture = fs::exists(dir / "pics") ? (dir / "pics" / "semiregular_level1.png").string() : png;
+      ASSERT_TRUE(fs::exists(picture)) << command + axes;
+      // The model is in the picture: some pixels differ from the white background.
+      const Image im = read_png(picture);
+      std::size_t drawn = 0;
+      for (std::size_t i = 0; i + 2 < im.pixels.size(); i += im.channels) drawn += im.pixels[i] != 255 || im.pixels[i + 1] != 255;
+      EXPECT_GT(drawn, 100u) << command + axes;
+    }
+  }
+  // The same option refused when it is zero, before any work.
+  r = run("render " + a + " -o " + png + " --view 0,0,0", dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "--view: the direction is zero")) << r.err;
+}
+
 // --max-triangles -1 was wrapped to 2^64 - 1 by the parser: build said "must be in 1 .. 2^31, not
 // 18446744073709551615", a number the user never typed, and subdiv named no value at all.
 TEST(Robustness, MaxTrianglesNamesTheValueGiven) {
