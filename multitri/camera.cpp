@@ -123,10 +123,13 @@ Frustum Camera::frustum() const {
 
 Camera frame_sphere(const glm::vec3& center, float radius, const glm::vec3& dir, float fov_y_deg, float aspect,
                     const glm::vec3& up) {
-  const float dir_len = glm::length(dir);
+  // The direction's length in double: in float, |dir|^2 overflows past ~1.8e19 and underflows below
+  // ~1e-19, and a finite non-zero direction such as (3e19, 0, 0) was refused as zero.
+  const glm::dvec3 ddir(dir);
+  const double dir_len = glm::length(ddir);
   if (!(radius > 0.0f) || !std::isfinite(radius))
     throw InvalidInput("frame_sphere: radius " + std::to_string(radius) + " is not a positive number");
-  if (!(dir_len > 0.0f) || !std::isfinite(dir_len) || !std::isfinite(center.x) || !std::isfinite(center.y) ||
+  if (!(dir_len > 0.0) || !std::isfinite(dir_len) || !std::isfinite(center.x) || !std::isfinite(center.y) ||
       !std::isfinite(center.z))
     throw InvalidInput("frame_sphere: the centre is not finite or the view direction is zero");
   if (!(fov_y_deg > 0.0f && fov_y_deg < 180.0f) || !(aspect > 0.0f) || !std::isfinite(aspect))
@@ -136,7 +139,7 @@ Camera frame_sphere(const glm::vec3& center, float radius, const glm::vec3& dir,
   cam.aspect = aspect;
   const float half = glm::radians(fov_y_deg) * 0.5f * std::min(1.0f, aspect);
   const float dist = radius / std::sin(half);
-  const glm::vec3 forward = dir / dir_len;
+  const glm::vec3 forward(ddir / dir_len);
   cam.target = center;
   cam.eye = center - forward * dist;
   cam.up = usable_up(forward, up);

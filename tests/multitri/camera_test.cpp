@@ -168,6 +168,18 @@ TEST(Camera, FrameSphereLookingAlongUp) {
   }
 }
 
+// Any finite non-zero direction frames the sphere, whatever its length: in float, the length of
+// (3e19, 0, 0) overflowed and that of (1e-30, 0, 0) underflowed, and both were refused as zero.
+TEST(Camera, FrameSphereTakesDirectionsOfAnyLength) {
+  std::mt19937 rng(6);
+  for (const glm::vec3 dir : {glm::vec3(3e19f, 0, 0), glm::vec3(1e30f, 1e30f, 1e30f), glm::vec3(1e-30f, 0, 0),
+                              glm::vec3(0, -1e-40f, 0), glm::vec3(3e38f, -3e38f, 1)}) {
+    const Camera cam = frame_sphere({1, 2, 3}, 2.0f, dir, 45.0f, 1.5f);
+    EXPECT_NEAR(glm::length(glm::dvec3(cam.forward()) - glm::normalize(glm::dvec3(dir))), 0.0, 1e-5);
+    expect_sphere_framed(cam, {1, 2, 3}, 2.0f, rng);
+  }
+}
+
 TEST(Camera, FrameSphereRejectsBadInput) {
   EXPECT_THROW(frame_sphere({0, 0, 0}, 0.0f, {1, 0, 0}, 45.0f, 1.0f), InvalidInput);
   EXPECT_THROW(frame_sphere({0, 0, 0}, -1.0f, {1, 0, 0}, 45.0f, 1.0f), InvalidInput);
