@@ -160,6 +160,10 @@ class StagedFolder {
   std::string folder_, stage_;
   std::vector<std::string> made_, names_;
   bool committed_ = false;
+  // Its entries in InterruptCleanup: the folders it made, the staging folder and the files written there
+  // (an interrupted command leaves none of them), forgotten once committed or removed.
+  std::vector<int> cleanup_;
+  void forget_cleanup();
 };
 
 /// Wall-clock stopwatch in milliseconds.

@@ -429,6 +429,8 @@ StagedFolder::StagedFolder(const std::string& folder) : folder_(folder) {
     for (const std::string& p : made_) fs::remove(p, ec);
     throw IoError(folder, e.code().message());
   }
+  for (const std::string& p : made_) cleanup_.push_back(InterruptCleanup::add(p, true));
+  cleanup_.push_back(InterruptCleanup::add(stage_, true));
   staging_folders().emplace_back(stage_, folder_);
 }
 
@@ -437,11 +439,19 @@ StagedFolder::~StagedFolder() {
   std::error_code ec;
   if (!stage_.empty()) std::filesystem::remove_all(stage_, ec);
   for (const std::string& p : made_) std::filesystem::remove(p, ec);  // deepest first; only if empty
+  forget_cleanup();
+}
+
+void StagedFolder::forget_cleanup() {
+  for (const int slot : cleanup_) InterruptCleanup::forget(slot);
+  cleanup_.clear();
 }
 
 std::string StagedFolder::path(const std::string& name) {
   names_.push_back(name);
-  return (std::filesystem::path(stage_) / name).string();
+  const std::string p = (std::filesystem::path(stage_) / name).string();
+  cleanup_.push_back(InterruptCleanup::add(p, false));
+  return p;
 }
 
 std::string StagedFolder::user_path(const std::string& path) {
@@ -484,6 +494,7 @@ void StagedFolder::commit() {
           fs::remove(copy, ec);
           throw IoError(m.user, "cannot write beside the symbolic link's target " + m.to.string() + ": " + why);
         }
+        cleanup_.push_back(InterruptCleanup::add(copy.string(), false));
         m.from = copy;
         m.copied = true;
       }
@@ -504,6 +515,7 @@ void StagedFolder::commit() {
   std::error_code ec;
   fs::remove_all(stage_, ec);  // the files copied to links' targets are still in it
   committed_ = true;
+  forget_cleanup();
 }
 
 namespace {
@@ -750,6 +762,9 @@ int run(int argc, char** argv) {
   // staged temporary file behind. Ignored, the write fails with EFBIG instead, like a full disk: the writer
   // removes what it staged and the error names the file.
   std::signal(SIGXFSZ, SIG_IGN);
+  // Interrupted (Ctrl-C, kill, a closed terminal or pipe), the command removes its temporary files and
+  // staging folders before it ends by that signal: no .tmp.* file or .varmesh-partial-* folder is left.
+  InterruptCleanup::install_handlers();
   CLI::App app{"varmesh: variable-resolution triangle meshes (Multi-Triangulations, 4-k meshes, progressive meshes)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "varmesh 0.1.0");

@@ -1,11 +1,16 @@
 #include "multitri/file_util.hpp"
 
+#include <array>
+#include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
+
+#include <unistd.h>
 
 #include "multitri/errors.hpp"
 
@@ -23,7 +28,76 @@ std::string describe(std::filesystem::file_type type) {
   }
 }
 
+// The recorded paths. A slot's state says what its buffer holds: a writer claims a free slot (kFree ->
+// kWriting), copies the path in and publishes it (kFile or kFolder, release order); the signal handler reads
+// only published slots. Forgetting a slot frees it. Static storage: nothing is allocated in a handler.
+enum SlotState : int { kFree = 0, kWriting, kFile, kFolder };
+struct CleanupSlot {
+  std::atomic<int> state{kFree};
+  std::array<char, InterruptCleanup::kMaxPath + 1> path{};
+};
+std::array<CleanupSlot, InterruptCleanup::kMaxEntries> g_cleanup;
+static_assert(std::atomic<int>::is_always_lock_free, "the handler reads the slots' states");
+
+extern "C" void cleanup_and_reraise(int sig) {
+  InterruptCleanup::remove_recorded();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
 }  // namespace
+
+int InterruptCleanup::add(const std::string& path, bool folder) {
+  if (path.empty() || path.size() > kMaxPath) return -1;
+  for (std::size_t i = 0; i < kMaxEntries; ++i) {
+    int expected = kFree;
+    CleanupSlot& s = g_cleanup[i];
+    if (!s.state.compare_exchange_strong(expected, kWriting, std::memory_order_acquire)) continue;
+    std::memcpy(s.path.data(), path.data(), path.size());
+    s.path[path.size()] = '\0';
+    s.state.store(folder ? kFolder : kFile, std::memory_order_release);
+    return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void InterruptCleanup::forget(int slot) {
+  if (slot >= 0 && static_cast<std::size_t>(slot) < kMaxEntries)
+    g_cleanup[static_cast<std::size_t>(slot)].state.store(kFree, std::memory_order_release);
+}
+
+std::size_t InterruptCleanup::pending() {
+  std::size_t n = 0;
+  for (const CleanupSlot& s : g_cleanup) n += s.state.load(std::memory_order_acquire) >= kFile;
+  return n;
+}
+
+void InterruptCleanup::remove_recorded() {
+  // Files first, then folders: a folder is removed only once empty, and a staging folder holds recorded
+  // files and the folders made for it are nested, so the folders are tried until a round removes none.
+  for (CleanupSlot& s : g_cleanup)
+    if (s.state.load(std::memory_order_acquire) == kFile) ::unlink(s.path.data());
+  for (bool removed = true; removed;) {
+    removed = false;
+    for (CleanupSlot& s : g_cleanup)
+      if (s.state.load(std::memory_order_acquire) == kFolder && ::rmdir(s.path.data()) == 0) {
+        s.state.store(kFree, std::memory_order_release);
+        removed = true;
+      }
+  }
+}
+
+void InterruptCleanup::install_handlers() {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) {
+    struct sigaction sa {};
+    sa.sa_handler = cleanup_and_reraise;
+    sigemptyset(&sa.sa_mask);
+    // The other signals wait while one runs the cleanup.
+    for (const int other : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) sigaddset(&sa.sa_mask, other);
+    sa.sa_flags = SA_RESETHAND;
+    sigaction(sig, &sa, nullptr);
+  }
+}
 
 std::string read_file(const std::string& path) {
   // A folder opens as a stream on Linux, and seeking to its end reports a size of up to 2^63 bytes. A FIFO
@@ -90,6 +164,7 @@ void write_file_atomically(const std::string& path, const std::string& contents)
   std::random_device rd;
   const fs::path tmp =
       target.parent_path() / bounded_file_name(".tmp.", target.filename().string(), "." + std::to_string(rd()));
+  const CleanupGuard cleanup(tmp.string(), false);
   {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw IoError(path, std::string("cannot create a temporary file: ") + std::strerror(errno));

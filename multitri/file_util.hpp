@@ -1,5 +1,6 @@
 #pragma once
 /// Whole-file reading and atomic writing, shared by every reader and writer.
+#include <cstddef>
 #include <filesystem>
 #include <string>
 
@@ -23,9 +24,46 @@ std::filesystem::path resolve_output_path(const std::string& path);
 /// its temporary name must be too (a 250-byte output name failed with "File name too long").
 std::string bounded_file_name(const std::string& prefix, const std::string& name, const std::string& suffix);
 
+/// Files and folders to remove if the process is interrupted before it removes or renames them itself: the
+/// temporary files of write_file_atomically() and, in the command line tool, its staging folders. An entry
+/// holds its own copy of the path (at most kMaxPath bytes; longer paths and entries beyond kMaxEntries are
+/// not recorded, the cleanup being best effort). Registering and forgetting take a lock-free slot and may be
+/// called from any thread.
+class InterruptCleanup {
+ public:
+  static constexpr std::size_t kMaxEntries = 128, kMaxPath = 1024;
+  /// Records `path` (a file to unlink, or an empty folder to remove); returns its slot, or -1 when it was not
+  /// recorded.
+  static int add(const std::string& path, bool folder);
+  /// Forgets the entry of slot `slot` (nothing for -1).
+  static void forget(int slot);
+  /// Entries recorded now (for tests).
+  static std::size_t pending();
+  /// Installs handlers of SIGINT, SIGTERM, SIGHUP and SIGPIPE that remove the recorded files, then the
+  /// recorded folders (those left empty), and then end the process by the same signal with its default
+  /// action (the exit status still says which signal ended it). Only async-signal-safe calls are made in
+  /// the handler (unlink, rmdir, signal, raise).
+  static void install_handlers();
+  /// What the handlers do before the signal's default action (for tests): removes what is recorded.
+  static void remove_recorded();
+};
+
+/// An entry of InterruptCleanup for the life of the object.
+class CleanupGuard {
+ public:
+  CleanupGuard(const std::string& path, bool folder) : slot_(InterruptCleanup::add(path, folder)) {}
+  ~CleanupGuard() { InterruptCleanup::forget(slot_); }
+  CleanupGuard(const CleanupGuard&) = delete;
+  CleanupGuard& operator=(const CleanupGuard&) = delete;
+
+ private:
+  int slot_;
+};
+
 /// Writes `contents` to `path` atomically: a temporary file in the folder of resolve_output_path(path),
 /// flushed, then renamed over that file (so a symbolic link at `path` keeps pointing to the new file). On
 /// any failure the temporary file is removed and IoError naming `path` is thrown; `path` is left untouched.
+/// The temporary file is recorded in InterruptCleanup while it exists.
 void write_file_atomically(const std::string& path, const std::string& contents);
 
 }  // namespace varmesh

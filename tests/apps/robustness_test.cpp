@@ -2,8 +2,12 @@
 // line of error that names the file, line or option at fault, and leaves no output behind.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -1143,6 +1147,46 @@ TEST(Robustness, MaxTrianglesNamesTheValueGiven) {
   }
   EXPECT_FALSE(fs::exists(dir / "h.vrm"));
   EXPECT_FALSE(fs::exists(dir / "s.obj"));
+}
+
+// Runs varmesh with `args` (stdout to /dev/null) and stderr on a pipe whose reading end is already closed:
+// its first progress line raises SIGPIPE, as a closed terminal or `| head` would. Returns the wait status.
+int run_with_stderr_closed(const std::vector<std::string>& args) {
+  int fds[2];
+  if (::pipe(fds) != 0) return -1;
+  ::close(fds[0]);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::signal(SIGPIPE, SIG_DFL);  // the test runner may ignore it, and exec keeps an ignored signal ignored
+    ::dup2(fds[1], 2);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    std::vector<char*> argv{const_cast<char*>(VARMESH_EXE)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(VARMESH_EXE, argv.data());
+    ::_exit(127);
+  }
+  ::close(fds[1]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+// A command ended by a signal while its staging folder exists (compare makes it first, then reports its
+// progress on stderr) removes the staging folder and the folders it made for the output: the default
+// action of SIGPIPE left .varmesh-partial-* behind.
+TEST(Robustness, AnInterruptedCommandLeavesNoStagingFolder) {
+  const auto dir = testing::scratch_dir("robust_interrupted");
+  fs::create_directories(dir / "existing");
+  for (const fs::path& out : {dir / "new" / "out", dir / "existing"}) {
+    const int status = run_with_stderr_closed({"compare", "--quick", "--cases", "image", "--out", out.string()});
+    ASSERT_TRUE(WIFSIGNALED(status)) << out << ": status " << status;
+    EXPECT_EQ(WTERMSIG(status), SIGPIPE) << out;
+    EXPECT_EQ(staging_leftovers(dir), std::vector<std::string>{}) << out;
+  }
+  EXPECT_FALSE(fs::exists(dir / "new")) << "the folders made for the output stay after an interruption";
+  EXPECT_TRUE(fs::is_directory(dir / "existing")) << "the user's folder was removed";
 }
 
 }  // namespace
