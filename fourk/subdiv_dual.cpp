@@ -15,6 +15,7 @@
 // and checks the conditions of PolyMesh::validate() on the way, so a step costs one hash table in total.
 #include "fourk/subdiv_dual.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <numbers>
@@ -106,6 +107,10 @@ Topology build_topology(const PolyMesh& in, const char* who) {
     const glm::dvec3& p = in.positions[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       throw InvalidInput(w + "vertex " + str(v) + " has a non-finite coordinate", v);
+    // As PolyMesh::validate(): a midpoint or a corner point of coordinates near the double maximum
+    // overflows before it is scaled down.
+    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > 1e300)
+      throw InvalidInput(w + "vertex " + str(v) + " has a coordinate beyond 1e300 in size", v);
   }
   const std::size_t nc = in.corners.size();
   Topology t;

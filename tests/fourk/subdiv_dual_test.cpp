@@ -914,5 +914,31 @@ TEST(DualSteps, ZeroStepsIsACopy) {
   EXPECT_STREQ(to_string(DualScheme::kDooSabin), "doo-sabin");
 }
 
+// The steps check what PolyMesh::validate() checks, including coordinates beyond 1e300 in size: a cube
+// scaled to 1.5e308 used to pass and come back with infinite midpoints and corner points.
+TEST(DualSteps, HugeCoordinatesAreRefusedAsValidateDoes) {
+  PolyMesh huge = make_quad_cube();
+  for (auto& p : huge.positions) p *= 1.5e308;
+  huge.positions[5].z = -1.5e308;
+  EXPECT_THROW(huge.validate(), InvalidInput);
+  for (const DualScheme scheme : kSchemes) {
+    try {
+      (void)dual_step(huge, scheme);
+      ADD_FAILURE() << to_string(scheme) << ": no throw";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex 0 has a coordinate beyond 1e300"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(subdivide_dual(huge, scheme, 1), InvalidInput);
+    EXPECT_THROW(dual_mesh_size(huge, scheme, 1), InvalidInput);
+  }
+  // At the limit validate() accepts, the steps give finite points.
+  PolyMesh edge = make_quad_cube();
+  for (auto& p : edge.positions) p *= 1e300;
+  ASSERT_NO_THROW(edge.validate());
+  for (const DualScheme scheme : kSchemes)
+    for (const glm::dvec3& p : subdivide_dual(edge, scheme, 2).positions)
+      ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) << to_string(scheme);
+}
+
 }  // namespace
 }  // namespace varmesh
