@@ -791,6 +791,9 @@ Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, Su
   // all free.
   std::unordered_set<std::uint64_t> taken;  // undirected edges of the mesh and of the fans so far
   for (std::size_t e = 0; e < t.num_edges(); ++e) taken.insert(undirected_edge_key(t.edge_verts[2 * e], t.edge_verts[2 * e + 1]));
+  // Per base face, the corner its fan starts from: a quad's first diagonal step splits the diagonal from
+  // that corner, and its node error is measured against that diagonal's midpoint.
+  std::vector<Index> fan_apex(t.num_faces, 0);
   for (Index f = 0; f < t.num_faces; ++f) {
     const Index off = t.offset(f), k = t.face_size(f);
     Index apex = 0;
@@ -808,6 +811,7 @@ Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, Su
                            f);
       for (Index i = 2; i + 1 < k; ++i)
         taken.insert(undirected_edge_key(t.face_verts[off + apex], t.face_verts[off + (apex + i) % k]));
+      fan_apex[f] = apex;
     }
     for (Index i = 1; i + 1 < k; ++i) {
       const std::array<Index, 3> c{t.face_verts[off + apex], t.face_verts[off + (apex + i) % k],
@@ -841,7 +845,9 @@ Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, Su
           created.push_back(slot_tri[off + i]);
           mid += p[c[i]];
         }
-        mid = k == 4 ? 0.5 * (p[c[0]] + p[c[2]]) : mid / static_cast<double>(k);
+        // Later levels fan every quad from corner 0; a base quad from its fan_apex.
+        const Index a = s == 0 ? fan_apex[f] : 0;
+        mid = k == 4 ? 0.5 * (p[c[a]] + p[c[(a + 2) % 4]]) : mid / static_cast<double>(k);
         const std::span<const Index> removed(tri_ids.data() + tri_offset[f], tri_offset[f + 1] - tri_offset[f]);
         b.add_node(k == 4 ? NodeKind::kSplit : NodeKind::kGeneric, removed, created, dist(nv + f, mid));
         builder_step.push_back(static_cast<std::uint16_t>(s + 1));

@@ -180,9 +180,10 @@ std::vector<glm::dvec3> catmull_clark_limit_positions(const SubdivMesh& mesh);
 /// another polygon: k - 2 -> k; an edge step: 2 -> 4, or 1 -> 2 on a border edge). Every vertex sits at
 /// its position after all `steps` steps, so the fully refined front is the uniform result (to_tri_mesh)
 /// and every front is a conforming mesh through points of it. Node error: the largest distance, over the
-/// node and its descendants, between a new vertex and the midpoint of the edge it splits (saturated by
-/// MtBuilder). The base polygons are fanned from their first corner, or from the first corner whose
-/// diagonals are not edges already (a diagonal used twice would leave no front conforming). Throws as
+/// node and its descendants, between a new vertex and the midpoint of the edge it splits (for a base
+/// quad, the diagonal its fan was cut along; saturated by MtBuilder). The base polygons are fanned from
+/// their first corner, or from the first corner whose diagonals are not edges already (a diagonal used
+/// twice would leave no front conforming). Throws as
 /// subdivide, and InvalidInput naming a face whose every fan has such a diagonal, or two faces whose fans
 /// share a triangle.
 struct SubdivMtInfo {
