@@ -530,7 +530,13 @@ void StencilTable::apply(std::span<const double> in, std::span<double> out, int 
 }
 
 std::vector<double> StencilTable::apply(std::span<const double> in, int components) const {
-  std::vector<double> out(num_outputs() * static_cast<std::size_t>(std::max(components, 1)));
+  // The input size is checked before the output is allocated: a wrong component count must not ask for
+  // num_outputs() times that many doubles first.
+  if (components < 1) throw InvalidInput("StencilTable::apply: components must be at least 1");
+  if (in.size() != num_inputs * static_cast<std::size_t>(components))
+    throw InvalidInput("StencilTable::apply: input has " + std::to_string(in.size()) + " values, expected " +
+                       std::to_string(num_inputs * static_cast<std::size_t>(components)));
+  std::vector<double> out(num_outputs() * static_cast<std::size_t>(components));
   apply(in, out, components);
   return out;
 }

@@ -504,5 +504,15 @@ TEST(Subdiv, AdaptiveNodeErrorsCoverTheSplitEdge) {
       }
 }
 
+// The allocating apply() checks the input size before it sizes the output: a component count that does
+// not match the input used to allocate num_outputs() x components doubles first (std::bad_alloc here).
+TEST(Subdiv, StencilApplyChecksSizesBeforeAllocating) {
+  const std::vector<StencilTable> tables = subdiv_stencil_tables(make_quad_cube(), SubdivScheme::kLinear, 1);
+  const std::vector<double> in(3 * tables[0].num_inputs, 1.0);
+  EXPECT_THROW((void)tables[0].apply(std::span<const double>(in), 1 << 30), InvalidInput);
+  EXPECT_THROW((void)tables[0].apply(std::span<const double>(in), 0), InvalidInput);
+  EXPECT_EQ(tables[0].apply(std::span<const double>(in), 3).size(), 3 * tables[0].num_outputs());
+}
+
 }  // namespace
 }  // namespace varmesh
