@@ -771,7 +771,38 @@ std::vector<glm::dvec3> catmull_clark_limit_positions(const SubdivMesh& mesh) {
   return out;
 }
 
+namespace {
+
+// The Mt holds every triangle of every step, several times what subdivide() keeps: refused up front when
+// it would not fit in memory, before the uniform mesh is computed. Triangles: the base fans, then per
+// level with C corners, C from the diagonal step and 2C from the edge step. About 120 bytes per triangle
+// at the peak, builder and Mt together (measured on a 4-8 cube: 6.29 M triangles at 18 steps, 726 MB).
+void check_mt_size(const SubdivTopology& t, int steps) {
+  check_steps(t, steps);  // the index limits: every level's counts fit below
+  double triangles = double(t.face_verts.size()) - 2.0 * double(t.num_faces);
+  LevelCounts c = counts_of(t);
+  for (int s = 0; s < steps; ++s) {
+    if (s % 2 == 0) {
+      triangles += double(c.c);
+    } else {
+      triangles += 2.0 * double(c.c);
+      c = c.next();
+    }
+  }
+  const double bytes = 120.0 * triangles, ram = physical_memory_bytes();
+  if (ram > 0.0 && bytes > ram)
+    throw InvalidInput("build_subdivision_mt: " + std::to_string(steps) + " steps make about " +
+                           std::to_string(static_cast<long long>(triangles / 1e6)) +
+                           " M triangles in the hierarchy, about " + std::to_string(static_cast<long long>(bytes / 1e9)) +
+                           " GB, more than the " + std::to_string(static_cast<long long>(ram / 1e9)) +
+                           " GB of memory here (steps)",
+                       static_cast<std::uint64_t>(steps));
+}
+
+}  // namespace
+
 Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, SubdivMtInfo* info) {
+  check_mt_size(make_subdiv_topology(base), steps);
   const SubdivMesh final_mesh = subdivide(base, scheme, steps);
   const auto& p = final_mesh.positions;
   MtBuilder b;

@@ -183,9 +183,10 @@ std::vector<glm::dvec3> catmull_clark_limit_positions(const SubdivMesh& mesh);
 /// node and its descendants, between a new vertex and the midpoint of the edge it splits (for a base
 /// quad, the diagonal its fan was cut along; saturated by MtBuilder). The base polygons are fanned from
 /// their first corner, or from the first corner whose diagonals are not edges already (a diagonal used
-/// twice would leave no front conforming). Throws as
-/// subdivide, and InvalidInput naming a face whose every fan has such a diagonal, or two faces whose fans
-/// share a triangle.
+/// twice would leave no front conforming). Throws as subdivide; InvalidInput naming `steps` when the
+/// hierarchy (every triangle of every step, about 120 bytes each at the peak) would not fit in the
+/// machine's physical memory, checked before allocating; and InvalidInput naming a face whose every fan
+/// has such a diagonal, or two faces whose fans share a triangle.
 struct SubdivMtInfo {
   std::vector<std::uint16_t> node_step;  ///< per Mt node: its binary step (1-based; 0 for the source)
   std::size_t uniform_faces = 0;         ///< triangles of the fully refined front

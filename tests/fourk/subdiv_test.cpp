@@ -514,5 +514,20 @@ TEST(Subdiv, StencilApplyChecksSizesBeforeAllocating) {
   EXPECT_EQ(tables[0].apply(std::span<const double>(in), 3).size(), 3 * tables[0].num_outputs());
 }
 
+// The hierarchy holds every triangle of every step, about 120 bytes each: 24 binary steps of a cube make
+// about 400 M of them (some 48 GB), while the uniform mesh alone (about 10 GB by subdivide()'s estimate)
+// passed subdivide()'s check. The build then ran into the out-of-memory killer; it is refused by name now.
+TEST(Subdiv, AdaptiveMtTooLargeForMemoryIsRefusedBeforeAllocating) {
+  const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  if (ram > 44e9) GTEST_SKIP() << "more than 44 GB of memory here: 24 steps would not be refused";
+  try {
+    (void)build_subdivision_mt(make_quad_cube(), SubdivScheme::kFourEight, 24);
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("GB of memory here (steps)"), std::string::npos) << e.what();
+    EXPECT_EQ(e.element(), 24u);
+  }
+}
+
 }  // namespace
 }  // namespace varmesh
