@@ -164,7 +164,9 @@ struct SubdivMesh {
 SubdivMesh subdivide(const PolyMesh& base, SubdivScheme scheme, int steps, const SubdivOptions& options = {});
 
 /// The per-step stencil tables of subdivide(base, scheme, steps): table s maps the vertices after s steps
-/// to those after s + 1. For attributes other than positions (colours, texture coordinates, ...).
+/// to those after s + 1. For attributes other than positions (colours, texture coordinates, ...). Throws
+/// as subdivide, and InvalidInput naming `steps` when the tables (about 240 bytes per final position, all
+/// steps together) would not fit in the machine's physical memory, checked before allocating.
 std::vector<StencilTable> subdiv_stencil_tables(const PolyMesh& base, SubdivScheme scheme, int steps);
 
 /// Catmull-Clark limit positions of the vertices of an even-step Catmull-Clark mesh: interior vertex with

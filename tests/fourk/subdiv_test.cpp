@@ -529,5 +529,20 @@ TEST(Subdiv, AdaptiveMtTooLargeForMemoryIsRefusedBeforeAllocating) {
   }
 }
 
+// The stencil tables of every step take about 240 bytes per final position: 25 binary steps of a cube
+// (200 M positions, some 48 GB of tables) passed subdivide()'s estimate (about 13 GB) and then ran out of
+// memory. Refused by name now.
+TEST(Subdiv, StencilTablesTooLargeForMemoryAreRefusedBeforeAllocating) {
+  const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  if (ram > 44e9) GTEST_SKIP() << "more than 44 GB of memory here: 25 steps would not be refused";
+  try {
+    (void)subdiv_stencil_tables(make_quad_cube(), SubdivScheme::kFourEight, 25);
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("GB of memory here (steps)"), std::string::npos) << e.what();
+    EXPECT_EQ(e.element(), 25u);
+  }
+}
+
 }  // namespace
 }  // namespace varmesh
