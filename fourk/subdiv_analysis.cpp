@@ -22,6 +22,7 @@
 #include <unordered_set>
 
 #include "multitri/errors.hpp"
+#include "multitri/huge_pages.hpp"
 
 namespace varmesh {
 
@@ -131,6 +132,16 @@ std::vector<Index> fine_vertex_of_patch_index(const PolyMesh& coarse, int k, int
 }
 
 std::optional<LocalSubdivMatrix> try_ring(SubdivScheme scheme, int k, int r) {
+  // The dense matrix grows as (k r^2)^2: refused before the patch and its tables are built when it would
+  // not fit in memory (valence 40000 at ring 1: 80001^2 entries, 51 GB, which ended in std::bad_alloc).
+  const double dim = 1.0 + double(k) * r * (r + 1.0), bytes = 8.0 * dim * dim, ram = physical_memory_bytes();
+  if (ram > 0.0 && bytes > ram)
+    throw InvalidInput("local_subdivision_matrix: valence " + std::to_string(k) + " at ring " + std::to_string(r) +
+                       " makes a dense " + std::to_string(static_cast<long long>(dim)) + " x " +
+                       std::to_string(static_cast<long long>(dim)) + " matrix, about " +
+                       std::to_string(static_cast<long long>(bytes / 1e9)) + " GB, more than the " +
+                       std::to_string(static_cast<long long>(ram / 1e9)) + " GB of memory here (valence)",
+                       static_cast<std::uint64_t>(k));
   // Two rings beyond r: every rule that can reach a ring-r row is then an interior rule, and a border
   // rule could only enter through a column outside ring r, which the closure test rejects.
   const int rings = r + 2;

@@ -85,7 +85,9 @@ struct LocalSubdivMatrix {
 /// Builds S from subdiv_stencil_tables(extraordinary_patch(valence, r + 2), scheme, 2) for the smallest
 /// r in [min_ring, max_ring] whose selected rows reference only selected columns (a larger r adds only
 /// the eigenvalues of the outer rings; the tests check that the leading ones do not change). Throws
-/// InvalidInput when valence < 3 or not 1 <= min_ring <= max_ring <= 32, std::logic_error when no r in
+/// InvalidInput when valence < 3 or not 1 <= min_ring <= max_ring <= 32, or naming the valence when the
+/// dense matrix of a ring it tries (8 bytes per entry) would not fit in the machine's physical memory
+/// (checked before anything of that ring is built), std::logic_error when no r in
 /// the range closes or the refined topology is not the patch of 2(r + 2) rings (an engine bug).
 /// Cost: O(k r^2) for the tables plus the dense (1 + k r (r + 1))^2 matrix.
 LocalSubdivMatrix local_subdivision_matrix(SubdivScheme scheme, int valence, int min_ring = 1, int max_ring = 8);

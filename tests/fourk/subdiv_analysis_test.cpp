@@ -16,6 +16,7 @@
 #include "fourk/poly_mesh.hpp"
 #include "fourk/subdiv.hpp"
 #include "multitri/errors.hpp"
+#include "multitri/huge_pages.hpp"
 
 namespace varmesh {
 namespace {
@@ -122,6 +123,17 @@ TEST(SubdivAnalysisPatch, RejectsBadArguments) {
   }
   EXPECT_TRUE(not_closed);
   EXPECT_NO_THROW(local_subdivision_matrix(SubdivScheme::kCatmullClark, 5, 1, 1));
+  // Valence 40000 (within the engine's 65535 edges) makes a dense 80001 x 80001 matrix, about 51 GB: its
+  // allocation used to end in std::bad_alloc; now refused by name first.
+  if (physical_memory_bytes() > 0.0 && physical_memory_bytes() < 48e9) {
+    try {
+      local_subdivision_matrix(SubdivScheme::kCatmullClark, 40000, 1, 1);
+      ADD_FAILURE() << "no throw";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("GB of memory here (valence)"), std::string::npos) << e.what();
+      EXPECT_EQ(e.element(), 40000u);
+    }
+  }
 }
 
 TEST(SubdivAnalysisMatrix, SmallestInvariantRingAndAffineRows) {
