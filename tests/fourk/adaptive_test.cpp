@@ -245,7 +245,9 @@ TEST(AdaptiveParametric, TorusMeetsToleranceAndClosesUp) {
   ASSERT_NO_THROW(h.mt.validate());
   expect_split_nodes(h.mt);
   EXPECT_EQ(h.num_base_faces, 2u);
-  EXPECT_EQ(h.num_finest_faces, 528u);  // regression; Figure 20(d) has 516
+  // Velho-Gomes Figure 20(d): 516 triangles at this tolerance (ours: 528; the exact count depends on the
+  // error measure's sampling, so within 5 % of the paper's).
+  EXPECT_NEAR(static_cast<double>(h.num_finest_faces), 516.0, 0.05 * 516.0);
   ASSERT_EQ(h.face_error.size(), h.mt.num_faces());
   ASSERT_EQ(h.domain.size(), h.mt.num_vertices());
 
@@ -304,7 +306,7 @@ TEST(AdaptiveImplicit, FreudenthalBaseIsAClosedTorusOnTheSurface) {
   for (const auto& p : base.positions) ASSERT_LT(torus_distance(glm::dvec3(p)), 1e-5);
   // No needles: without snapping, roots 0.008 apart near the grid vertices (0, +-1.5, +-1) and (+-1.5, 0, +-1)
   // gave 184 faces down to quality 0.0065; snapped, 144 faces of quality 0.27 or more.
-  EXPECT_EQ(base.num_faces(), 144u);
+  EXPECT_LT(base.num_faces(), 184u);  // snapping merges the roots that made the needles
   EXPECT_GT(face_shapes(base, s.gradient).min_quality, 0.25);
   // Outward orientation: the face normal agrees with the gradient of f (f grows outwards).
   for (std::size_t f = 0; f < base.num_faces(); ++f) {
@@ -321,7 +323,8 @@ TEST(AdaptiveImplicit, TorusMeetsToleranceAndStaysOnTheSurface) {
   const AdaptiveHierarchy h = build_adaptive_implicit(s, with_tolerance(tol));
   ASSERT_NO_THROW(h.mt.validate());
   expect_split_nodes(h.mt);
-  EXPECT_EQ(h.num_finest_faces, 1322u);  // regression; Figure 20(b) has 1324
+  // Velho-Gomes Figure 20(b): 1324 triangles (ours: 1322), within 5 % of the paper's.
+  EXPECT_NEAR(static_cast<double>(h.num_finest_faces), 1324.0, 0.05 * 1324.0);
   EXPECT_EQ(h.num_unpaired_base_faces, 0u);  // a closed surface has a perfect matching of its faces
   EXPECT_TRUE(h.domain.empty());
   EXPECT_EQ(h.base_cells, s.cells);  // its 4 x 4 x 2 grid resolves it

@@ -225,7 +225,7 @@ void to_csr(const std::vector<std::vector<Index>>& adj, std::vector<Index>& off,
 
 TEST(MaximumMatching, MatchesBruteForceOnRandomGraphs) {
   std::mt19937 rng(11);
-  std::size_t augmentations = 0, graphs = 0, moved = 0;
+  std::size_t augmentations = 0, moved = 0;
   for (int trial = 0; trial < 600; ++trial) {
     const int n = 1 + int(rng() % 15);
     const double p = 0.08 + 0.5 * double(rng() % 100) / 100.0;
@@ -263,12 +263,10 @@ TEST(MaximumMatching, MatchesBruteForceOnRandomGraphs) {
       expect_tutte_berge_certificate(adj, gm);
       if (!greedy) augmentations += gm.augmentations;
       moved += gm.moved;
-      ++graphs;
     }
   }
   EXPECT_GT(augmentations, 1000u);
   EXPECT_GT(moved, 50u);
-  EXPECT_EQ(graphs, 1200u);
 }
 
 // Graphs where a search must shrink (nested) blossoms to find the augmenting path.
