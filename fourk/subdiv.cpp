@@ -810,6 +810,18 @@ void check_mt_size(const SubdivTopology& t, int steps) {
 }  // namespace
 
 Mt build_subdivision_mt(const PolyMesh& base, SubdivScheme scheme, int steps, SubdivMtInfo* info) {
+  // The Mt keeps float positions, and every scheme's points are convex combinations of the base's: a base
+  // within float's range stays there. Past it (validate() takes up to 1e300) the builder would refuse a
+  // "position that is not finite" of some subdivided vertex; name the base vertex instead.
+  for (std::size_t v = 0; v < base.positions.size(); ++v) {
+    const glm::dvec3& q = base.positions[v];
+    const double m = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
+    if (!(m <= double(std::numeric_limits<float>::max())))
+      throw InvalidInput("build_subdivision_mt: vertex " + std::to_string(v) +
+                             " has a coordinate beyond float's range (about 3.4e38), which the hierarchy's float "
+                             "positions cannot hold",
+                         v);
+  }
   check_mt_size(make_subdiv_topology(base), steps);
   const SubdivMesh final_mesh = subdivide(base, scheme, steps);
   const auto& p = final_mesh.positions;

@@ -518,6 +518,23 @@ TEST(Subdiv, StencilApplyChecksSizesBeforeAllocating) {
 // about 400 M of them (some 48 GB), while the uniform mesh alone (about 10 GB by subdivide()'s estimate)
 // passed subdivide()'s check. The build would then run out of memory part of the way (estimated from the
 // measured 726 MB at 18 steps; under a 4 GB `ulimit -v` it ended in std::bad_alloc); refused by name now.
+// A base beyond float's range (validate() takes coordinates up to 1e300) is refused naming its vertex; the
+// builder used to say that some subdivided vertex's position was not finite.
+TEST(Subdiv, AdaptiveMtRefusesABaseBeyondFloatRange) {
+  PolyMesh cube = make_quad_cube();
+  cube.positions[5] *= 1e39;
+  ASSERT_NO_THROW(cube.validate());
+  try {
+    (void)build_subdivision_mt(cube, SubdivScheme::kCatmullClark, 1);
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 5 has a coordinate beyond float's range"), std::string::npos) << e.what();
+    EXPECT_EQ(e.element(), 5u);
+  }
+  cube.positions[5] = glm::dvec3(3e38, -3e38, 1.0);  // within range: built
+  EXPECT_NO_THROW((void)build_subdivision_mt(cube, SubdivScheme::kCatmullClark, 1));
+}
+
 TEST(Subdiv, AdaptiveMtTooLargeForMemoryIsRefusedBeforeAllocating) {
   const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
   if (ram > 44e9) GTEST_SKIP() << "more than 44 GB of memory here: 24 steps would not be refused";
