@@ -239,7 +239,7 @@ bool hierarchy_info(const std::string& path) {
   // The magic decides; a file too short for one (or unreadable) is a hierarchy file when its extension
   // says so, and then the loader names the problem (truncated, cannot open).
   std::string m = file_magic(path);
-  const std::string ext = std::filesystem::path(path).extension().string();
+  const std::string ext = lower_extension(path);
   if (m != kVmhMagic && m != kVrmMagic) {
     if (m != std::string(8, '\0')) return false;
     if (ext == ".vmh") m = kVmhMagic;
@@ -442,7 +442,7 @@ void write_hierarchy_and_pictures(const BuildArgs& a, const Mt& mt, const std::v
 }  // namespace
 
 int run_build(const BuildArgs& a) {
-  if (std::filesystem::path(a.output).extension() != ".vrm") throw InvalidInput("build: -o must end in .vrm, not '" + a.output + "'");
+  if (lower_extension(a.output) != ".vrm") throw InvalidInput("build: -o must end in .vrm, not '" + a.output + "'");
   if (a.max_triangles == 0 || a.max_triangles > BuildArgs::kHardMaxTriangles)
     throw InvalidInput("build: --max-triangles must be in 1 .. 2^31, not " + std::to_string(a.max_triangles));
   if (!std::isfinite(a.tolerance)) throw InvalidInput("build: --tolerance must be a finite number");
@@ -687,7 +687,7 @@ void print_target_note(const PmBuildArgs& a, const QemStats& st, const VertexHie
 
 int run_pm_build(const PmBuildArgs& a) {
   if (!is_mesh_file(a.input)) throw InvalidInput("pm build: INPUT must be a mesh (.obj, .off, .ply), not '" + a.input + "'");
-  if (std::filesystem::path(a.output).extension() != ".vmh") throw InvalidInput("pm build: -o must end in .vmh, not '" + a.output + "'");
+  if (lower_extension(a.output) != ".vmh") throw InvalidInput("pm build: -o must end in .vmh, not '" + a.output + "'");
   check_output_file(a.output);
   refuse_same_file(a.input, "the input mesh", a.output, "-o");
   QemOptions o;

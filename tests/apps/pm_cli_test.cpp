@@ -84,6 +84,25 @@ TEST(PmCli, BuildWritesTheHierarchyTheLibraryReads) {
 // serial one (a torus of 65,536 faces: two parts of at least 16,384).
 // Run without --quiet: the progress line, rewritten in place with carriage returns, is for a terminal only;
 // here stderr is a file, as in a log, and gets none of it (the first report comes at 4,096 collapses).
+// Hierarchy outputs take their extension in any case, as mesh outputs do (".VMH" and ".Vrm" were refused
+// as "must end in .vmh"); `info` tells a hierarchy by its magic either way.
+TEST(PmCli, HierarchyExtensionsInAnyCase) {
+  const Built b = build_torus("pm_cli_ext_case");
+  const fs::path upper = b.dir / "T.VMH", vrm = b.dir / "t.Vrm";
+  CmdResult r = run("pm build " + b.mesh.string() + " -o " + upper.string() + " --quiet", b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(testing::slurp(upper), testing::slurp(b.vmh)) << "the same hierarchy under either name";
+  r = run("info " + upper.string(), b.dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "collapses")) << r.out;
+  r = run("build " + b.mesh.string() + " --levels 1 --quiet -o " + vrm.string(), b.dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(vrm));
+  r = run("pm build " + b.mesh.string() + " -o " + (b.dir / "t.vmhx").string() + " --quiet", b.dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "must end in .vmh")) << r.err;
+}
+
 TEST(PmCli, ThreadsGiveTheLibrarysParallelHierarchy) {
   const fs::path dir = testing::scratch_dir("pm_cli_threads");
   const fs::path mesh = dir / "torus.obj", vmh = dir / "torus.vmh";
