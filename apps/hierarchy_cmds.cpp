@@ -51,6 +51,10 @@ void add_build_options(CLI::App& sub, BuildArgs& a) {
                  "0.0685, saddle 0.002, implicit-torus 0.046, the paper's figures)")
       ->check(check_positive);
   sub.add_option("--raw-size", a.raw_size, "adaptive on a .raw/.f32 float32 height field: W,H")->check(check_not_empty);
+  sub.add_option("--spacing", a.spacing, "adaptive on a height field: distance between samples (default 1), as in terrain")
+      ->each([&a](const std::string&) { a.heightfield_scale_given = true; });
+  sub.add_option("--z-scale", a.z_scale, "adaptive on a height field: multiply heights by this factor (default 1)")
+      ->each([&a](const std::string&) { a.heightfield_scale_given = true; });
   sub.add_option("--max-triangles", a.max_triangles,
                  "semiregular: refuse, before the build, a hierarchy whose finest mesh would have more faces than "
                  "this (base faces x 2^levels; default 2^22 = 4194304, about 1 GB and 10 s; at most 2^31)")
@@ -172,6 +176,9 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   }
   HeightFieldReadOptions ro;
   apply_raw_size(a.raw_size, a.input, ro);  // refuses --raw-size for anything but a .raw height field
+  ro.z_scale = a.z_scale;
+  if (a.heightfield_scale_given && (a.input == "torus" || a.input == "saddle" || a.input == "implicit-torus"))
+    throw InvalidInput("build: --spacing and --z-scale are for a height field, not the built-in " + a.input);
   if (a.input == "torus" || a.input == "saddle") {
     const ParametricSurface s = a.input == "torus" ? torus_parametric() : saddle_parametric();
     if (o.tolerance <= 0.0f) o.tolerance = a.input == "torus" ? 0.0685f : 0.002f;
@@ -184,7 +191,7 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
   if (is_mesh_file(a.input)) throw InvalidInput("build --method adaptive: give a height field or torus | saddle | implicit-torus, not a mesh");
   // Checked here (named: the file, its size, its span), not left to the builder: a span past float's reach
   // made the default tolerance infinite ("tolerance must be finite and > 0, got inf").
-  const HeightField field = read_checked_heightfield(a.input, ro);
+  const HeightField field = read_checked_heightfield(a.input, ro, a.spacing);
   if (o.tolerance <= 0.0f) {
     const auto [lo, hi] = std::minmax_element(field.z.begin(), field.z.end());
     o.tolerance = std::max(1e-6f, 0.01f * (*hi - *lo));
@@ -451,6 +458,7 @@ int run_build(const BuildArgs& a) {
   if (a.method != "adaptive") {
     if (a.tolerance > 0.0f) throw InvalidInput("build: --tolerance is for --method adaptive, not " + a.method);
     if (!a.raw_size.empty()) throw InvalidInput("build: --raw-size is for --method adaptive on a .raw height field");
+    if (a.heightfield_scale_given) throw InvalidInput("build: --spacing and --z-scale are for --method adaptive on a height field");
   }
   if (a.method != "semiregular" && a.max_triangles_given)
     throw InvalidInput("build: --max-triangles is for --method semiregular (adaptive refines to its --tolerance, simplify4k coarsens)");

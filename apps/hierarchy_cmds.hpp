@@ -17,6 +17,9 @@ struct BuildArgs {
   int levels = -1;             ///< semiregular: binary levels (default 4); simplify4k: at most this many (default all)
   float tolerance = -1.0f;     ///< adaptive: geometric tolerance (default: 1% of the bounding-box diagonal)
   std::string raw_size;        ///< adaptive on a .raw height field
+  float spacing = 1.0f;        ///< adaptive on a height field: distance between samples
+  float z_scale = 1.0f;        ///< adaptive on a height field: factor on the heights
+  bool heightfield_scale_given = false;  ///< --spacing or --z-scale given (set by the parser)
   std::string pictures;        ///< folder for PNGs of the levels (semiregular, simplify4k) or the result (adaptive)
   std::string up, view;        ///< pictures: "x,y,z" up axis and direction towards the eye (empty: defaults)
   /// semiregular: the most faces the finest mesh may have (base faces x 2^levels), checked before the build

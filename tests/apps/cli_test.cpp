@@ -2,6 +2,7 @@
 // meet what was asked.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <sys/wait.h>
@@ -405,6 +406,39 @@ TEST(CliOutputs, AMissingFolderIsRefusedBeforeTheWork) {
   }
   EXPECT_FALSE(fs::exists(missing));
   EXPECT_FALSE(fs::exists(dir / "ok.obj"));
+}
+
+// build --method adaptive on a height field takes --spacing and --z-scale as terrain does (a DEM in metres
+// with samples 30 m apart came out as needles): the finest front spans (W - 1) x spacing and the scaled
+// heights. Elsewhere the options are refused by name.
+TEST(CliBuild, AdaptiveHeightFieldTakesSpacingAndZScale) {
+  const auto dir = testing::scratch_dir("cli_build_spacing");
+  const fs::path field = dir / "t.f32";
+  const HeightField f = make_fractal_terrain(33, 17, 7, 20.0f);
+  write_heightfield_raw(field.string(), f);
+  const auto [lo, hi] = std::minmax_element(f.z.begin(), f.z.end());
+  const std::string vrm = (dir / "t.vrm").string(), fine = (dir / "fine.obj").string();
+  CmdResult r = run("build " + field.string() + " --raw-size 33,17 --method adaptive --spacing 30 --z-scale 2 "
+                    "--tolerance 0.5 --quiet -o " + vrm, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run("query " + vrm + " --error 0 -o " + fine, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const TriMesh m = read_mesh(fine);
+  glm::vec3 bmin(1e30f), bmax(-1e30f);
+  for (const glm::vec3& p : m.positions) bmin = glm::min(bmin, p), bmax = glm::max(bmax, p);
+  EXPECT_NEAR(bmax.x - bmin.x, 32 * 30.0f, 1e-3f);
+  EXPECT_NEAR(bmax.y - bmin.y, 16 * 30.0f, 1e-3f);
+  EXPECT_NEAR(bmax.z - bmin.z, 2.0f * (*hi - *lo), 1e-3f * (*hi - *lo));
+  const std::string mesh = (dir / "m.obj").string();
+  write_mesh(mesh, m);
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"build torus --method adaptive --spacing 2 -o " + vrm, "not the built-in torus"},
+           {"build " + mesh + " --levels 1 --z-scale 2 -o " + vrm, "are for --method adaptive on a height field"},
+           {"build " + field.string() + " --raw-size 33,17 --method adaptive --spacing 0 -o " + vrm, "--spacing must be finite and > 0"}}) {
+    r = run(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_TRUE(testing::contains(r.err, message)) << args << "\n" << r.err;
+  }
 }
 
 // terrain --budget N alone (as query and pm query take it): the finest mesh the budget allows.
