@@ -610,9 +610,20 @@ bool SrMesh::make_active_xv(Index n, int depth) {
   return node_active(n);
 }
 
+// Marks a node for the Xia-Varshney cycle guard while its operation runs, and unmarks it however the
+// operation ends: an exception from refine()'s sink unwinds the whole recursion, and a node left marked had
+// every later split or collapse refused as a cycle.
+struct SrMesh::InProgress {
+  std::uint8_t& mark;
+  explicit InProgress(std::uint8_t& m) noexcept : mark(m) { mark = 1; }
+  ~InProgress() { mark = 0; }
+  InProgress(const InProgress&) = delete;
+  InProgress& operator=(const InProgress&) = delete;
+};
+
 bool SrMesh::vsplit_xv(Index vs, int depth) {
   if (depth > kXvMaxDepth || in_progress_[vs]) return false;
-  in_progress_[vs] = 1;
+  const InProgress guard(in_progress_[vs]);
   bool ok = true;
   for (Index n : h_->stored_ring(vs))
     if (!make_active_xv(n, depth)) {
@@ -621,13 +632,12 @@ bool SrMesh::vsplit_xv(Index vs, int depth) {
     }
   ok = ok && node_active(vs) && xv_ring_matches(vs);
   if (ok) vsplit_kim_lee(vs);
-  in_progress_[vs] = 0;
   return ok;
 }
 
 bool SrMesh::ecol_xv(Index vs, int depth) {
   if (depth > kXvMaxDepth || in_progress_[vs]) return false;
-  in_progress_[vs] = 1;
+  const InProgress guard(in_progress_[vs]);
   const CollapseRecord& r = h_->record(vs);
   bool ok = true;
   for (Index c : {r.vt, r.vu})
@@ -643,7 +653,6 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
       }
   ok = ok && collapsible(vs) && xv_ring_matches(vs) && !extra_common_neighbors_kept(vs);
   if (ok) do_ecol(vs);
-  in_progress_[vs] = 0;
   return ok;
 }
 

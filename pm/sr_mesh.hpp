@@ -205,6 +205,9 @@ class SrMesh {
   std::uint64_t tie_key(Index e) const noexcept { return static_cast<std::uint64_t>(h_->num_nodes() - e); }
   /// Back to the base mesh (statistics kept). O(nodes + faces).
   void reset();
+  /// Forces e split (its ancestors first), telling sink(v) of each split once it is done. An exception from
+  /// the sink propagates and leaves a valid mesh with that split done. Throws InvalidInput when e is out of
+  /// range or a leaf.
   template <class Sink> void refine(Index e, Sink&& sink) {
     check_node(e, "refine");
     sink_ = [](void* ctx, Index v) { (*static_cast<std::remove_reference_t<Sink>*>(ctx))(v); };
@@ -461,6 +464,7 @@ class SrMesh {
   };
   KeptAnswer ecn_;
   std::vector<std::uint8_t> in_progress_;  // Xia-Varshney cycle guard
+  struct InProgress;                        // marks one node of in_progress_ while in scope
   void (*sink_)(void*, Index) = nullptr;
   void* sink_ctx_ = nullptr;
 };

@@ -1019,6 +1019,43 @@ TEST(SrMesh, DegenerateCasesOnAHandBuiltHierarchy) {
   EXPECT_GT(sr.stats().postponed_ecols, 0u);
 }
 
+// refine() calls the query's sink after each split; an exception from the sink leaves the mesh valid with
+// that split done. Under Xia-Varshney the operations in progress on the way (the requested split and the
+// splits forcing it) kept their cycle-guard marks, so every later split or collapse of those nodes was
+// refused as a dependency cycle, for the life of the mesh.
+TEST(SrMesh, AnExceptionFromTheSinkLeavesEveryNodeUsable) {
+  const VertexHierarchy h = full_hierarchy(make_torus(12, 6));
+  const Subtrees t = subtrees_of(h);
+  const auto top = static_cast<Index>(h.num_nodes() - 1);
+  struct Stop {};
+  for (RefinementScheme s : kSchemes) {
+    SCOPED_TRACE(scheme_name(s));
+    SrMesh sr(h, s);
+    EXPECT_THROW(sr.refine(top, [](Index) { throw Stop{}; }), Stop);
+    sr.validate();
+    ASSERT_TRUE(sr.is_refined(top));  // the sink hears of a split once it is done
+    EXPECT_TRUE(sr.ecol(top));        // legal right after the split, under every rule
+    EXPECT_TRUE(sr.vsplit(top));
+    // A split that forces others (a leaf's parent, from the base mesh): the sink stops the first one. Each
+    // node on the way can still be split, and the walk's checks hold afterwards.
+    sr.reset();
+    const Index deep = h.parent(0);
+    std::size_t calls = 0;
+    EXPECT_THROW(sr.refine(deep, [&](Index) {
+      if (++calls == 1) throw Stop{};
+    }), Stop);
+    sr.validate();
+    std::vector<Index> order;
+    sr.refine(deep, [&](Index x) { order.push_back(x); });
+    EXPECT_TRUE(sr.is_refined(deep));
+    EXPECT_FALSE(order.empty());
+    EXPECT_EQ(compare_with_oracle(sr), "");
+    WalkOptions o;
+    o.ops = 300, o.seed = 4;
+    EXPECT_TRUE(checked_walk(sr, o, &t).ok);
+  }
+}
+
 // SrMesh stores faces in its own (vsplit) order; the API must still speak original face ids: neighbor()
 // names the active face across each edge, for_each_face visits faces in increasing id order.
 TEST(SrMesh, NeighborsAndFaceOrderUseOriginalFaceIds) {
