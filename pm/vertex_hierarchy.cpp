@@ -73,11 +73,17 @@ void check_untrusted(const VertexHierarchyBuilder::Raw& raw) {
           std::to_string(raw.repair.input_faces));
   // The repair report adds up: every input vertex is some leaf's source or unreferenced, every input face
   // kept or dropped as degenerate or duplicate, and every leaf beyond one per source is a copy; and the input
-  // had 32-bit indices (a report raised by 2^63 on both sides of a sum would otherwise pass). Nothing is
-  // sized by these counts (input_mesh_of and leaves_of_inputs number densely); they are printed and compared.
-  if (raw.repair.input_vertices >= kInvalid || raw.repair.input_faces >= kInvalid || raw.repair.unreferenced_vertices >= kInvalid)
-    bad("repair report: an input of " + std::to_string(raw.repair.input_vertices) + " vertices and " +
-        std::to_string(raw.repair.input_faces) + " faces is beyond 32-bit indices");
+  // had 32-bit indices, so every count is below 2^32 (counts raised by 2^63 on both sides of a sum, or two
+  // terms of one sum raised by 2^63 each, would otherwise pass). Nothing is sized by these counts
+  // (input_mesh_of and leaves_of_inputs number densely); they are printed and compared.
+  {
+    const InputRepairReport& r = raw.repair;
+    for (std::size_t count : {r.input_vertices, r.input_faces, r.unreferenced_vertices, r.degenerate_faces, r.duplicate_faces,
+                              r.nonmanifold_edge_faces, r.nonmanifold_vertices, r.added_vertex_copies, r.locked_vertices})
+      if (count >= kInvalid)
+        bad("repair report: a count of " + std::to_string(count) + " for an input of " + std::to_string(r.input_vertices) +
+            " vertices and " + std::to_string(r.input_faces) + " faces is beyond 32-bit indices");
+  }
   {
     std::vector<Index> sources(raw.leaf_to_input);
     std::sort(sources.begin(), sources.end());
@@ -92,6 +98,16 @@ void check_untrusted(const VertexHierarchyBuilder::Raw& raw) {
     if (r.added_vertex_copies != nl - distinct)
       bad("repair report: " + std::to_string(r.added_vertex_copies) + " vertex copies, but " + std::to_string(nl - distinct) +
           " leaves share a source");
+    // The counts outside those sums: each face detached from a non-manifold edge and each non-manifold
+    // vertex split made at least one copy (manifold_input.cpp), and the locked vertices are the leaves locked.
+    if (r.nonmanifold_edge_faces + r.nonmanifold_vertices > r.added_vertex_copies)
+      bad("repair report: " + std::to_string(r.nonmanifold_edge_faces) + " faces detached and " +
+          std::to_string(r.nonmanifold_vertices) + " vertices split, but " + std::to_string(r.added_vertex_copies) +
+          " vertex copies");
+    const auto locked = static_cast<std::size_t>(std::count_if(raw.locked.begin(), raw.locked.end(), [](std::uint8_t x) { return x != 0; }));
+    if (r.locked_vertices != locked)
+      bad("repair report: " + std::to_string(r.locked_vertices) + " locked vertices, but " + std::to_string(locked) +
+          " leaves locked");
   }
   // Slack for the float rounding of the enclosing spheres: relative to the sphere's size and place, plus a few
   // of the smallest subnormal floats (coordinates near 1e-40 are rounded in absolute steps of that size).

@@ -580,7 +580,22 @@ TEST(HierarchyIo, ColoursAndLocksAreChecked) {
     ASSERT_LT(leaf, h.num_leaves());
     Bytes b = good;
     put_le(b, at.locked + leaf, 1, 1);
+    put_le(b, at.repair + 64, h.repair_report().locked_vertices + 1, 8);  // and counted
     rejected(b, "is locked but collapsed");
+  }
+  {
+    // The counts that take part in no sum: the locked vertices are the leaves locked, and each face
+    // detached from a non-manifold edge and each non-manifold vertex split made a copy of a vertex.
+    ASSERT_GT(h.repair_report().locked_vertices, 0u);
+    Bytes b = good;
+    put_le(b, at.repair + 64, h.repair_report().locked_vertices + 1, 8);
+    rejected(b, "locked");
+    b = good;
+    put_le(b, at.repair + 40, h.repair_report().added_vertex_copies + 1, 8);
+    rejected(b, "vertex copies");
+    b = good;
+    put_le(b, at.repair + 48, std::uint64_t{1} << 40, 8);
+    rejected(b, "repair report");
   }
   // And the writer refuses a colour the reader would refuse (a library caller's input with colours past 1).
   TriMesh bright = colored(make_grid(4, 4));
@@ -654,6 +669,13 @@ TEST(HierarchyIo, InconsistentRecordsBehindAValidChecksum) {
     Bytes b = good;
     put_le(b, at.repair, h.repair_report().input_vertices + (std::uint64_t{1} << 63), 8);
     put_le(b, at.repair + 16, h.repair_report().unreferenced_vertices + (std::uint64_t{1} << 63), 8);
+    rejected(b, "beyond 32-bit indices");
+  }
+  {
+    // The same on the faces' sum: dropped faces raised by 2^63 twice wrapped round to the input's count.
+    Bytes b = good;
+    put_le(b, at.repair + 24, h.repair_report().degenerate_faces + (std::uint64_t{1} << 63), 8);
+    put_le(b, at.repair + 32, h.repair_report().duplicate_faces + (std::uint64_t{1} << 63), 8);
     rejected(b, "beyond 32-bit indices");
   }
   {
