@@ -34,8 +34,8 @@
 /// Query API note: after a collapse, update() retries the collapses next to it (for_each_parent_candidate), so
 /// under Hoppe-97 and Xia-Varshney it reaches extract()'s answer. Under Kim-Lee it may keep a few sibling
 /// pairs finer than extract() would: an ecol postponed by the degenerate case (section 4.4) whose extra common
-/// neighbour goes away through a split of update()'s refine step, after its coarsen step. The answer is
-/// still a fixpoint of the query (tests/pm/sr_query_test.cpp).
+/// neighbour goes away through a split of update()'s refine step, after its coarsen step, or that no split
+/// ever unblocks (see coarsen_all). The answer is still a fixpoint of the query (tests/pm/sr_query_test.cpp).
 ///
 /// Invariants (validate()): every active face's corners are active; adjacency is symmetric and across
 /// opposite directed edges; every active vertex has one fan of faces (disc or half-disc); node states are
@@ -154,6 +154,10 @@ class SrMesh {
   bool can_ecol(Index vs) const;
 
   /// Splits until every vertex is a leaf / collapses until no ecol is possible. Return the operations done.
+  /// From the original mesh coarsen_all reaches the base mesh under every scheme. From a selectively
+  /// refined mesh under Kim-Lee it may stop above it: a collapse can give the children of another refined
+  /// node a common neighbour besides its cut vertices, and when every remaining collapse is postponed so
+  /// (section 4.4 waits for a split) none is possible (reset() goes to the base mesh).
   std::size_t refine_all();
   std::size_t coarsen_all();
 

@@ -1056,6 +1056,44 @@ TEST(SrMesh, AnExceptionFromTheSinkLeavesEveryNodeUsable) {
   }
 }
 
+// Section 4.4 postpones a collapse while its two vertices have a common neighbour besides the cut vertices,
+// until a split removes it. A collapse can create such a neighbour, and then coarsening alone may find
+// nothing to do above the base mesh. An icosahedron collapsed in this order: splitting the root 18 splits 19
+// first (a pre-split), then 16 splits into 0 and 14; collapsing 19 back makes it a neighbour of both 0 and
+// 14 besides the cut vertices 11 and 15, and 16 is then the only refined node with two active children.
+TEST(SrMesh, KimLeeCoarseningStopsWhereEveryCollapseIsPostponed) {
+  const VertexHierarchy h =
+      hierarchy_from_collapses(make_icosphere(0), {{2, 4}, {1, 7}, {10, 6}, {13, 9}, {0, 14}, {8, 3}, {11, 16}, {5, 12}});
+  const Subtrees t = subtrees_of(h);
+  SrMesh sr(h);
+  ASSERT_TRUE(sr.vsplit(18));
+  ASSERT_TRUE(sr.vsplit(16));
+  ASSERT_EQ(sr.stats().presplits, 1u);
+  ASSERT_TRUE(sr.ecol(19));
+  EXPECT_EQ(sr.active_vertices(), (std::vector<Index>{0, 11, 14, 15, 17, 19}));
+  DualPieceModel model(h, t);
+  model.sync(sr);
+  EXPECT_TRUE(model.extra_common_neighbors(16));
+  std::vector<Index> collapsible;
+  sr.for_each_coarsen_candidate([&](Index e) { collapsible.push_back(e); });
+  EXPECT_EQ(collapsible, (std::vector<Index>{16}));
+  EXPECT_FALSE(sr.can_ecol(16));
+  // coarsen_all collapses until no collapse is possible, which here is at once.
+  EXPECT_EQ(sr.coarsen_all(), 0u);
+  EXPECT_FALSE(at_base(sr));
+  sr.validate();
+  EXPECT_EQ(compare_with_oracle(sr), "");
+  // The way out is the paper's: split the common neighbour; then everything collapses. reset() goes there
+  // directly.
+  SrMesh other = sr;
+  other.reset();
+  EXPECT_TRUE(at_base(other));
+  ASSERT_TRUE(sr.vsplit(19));
+  EXPECT_TRUE(sr.can_ecol(16));
+  sr.coarsen_all();
+  EXPECT_TRUE(at_base(sr));
+}
+
 // SrMesh stores faces in its own (vsplit) order; the API must still speak original face ids: neighbor()
 // names the active face across each edge, for_each_face visits faces in increasing id order.
 TEST(SrMesh, NeighborsAndFaceOrderUseOriginalFaceIds) {
