@@ -127,14 +127,18 @@ void grid_faces(std::size_t w, std::size_t h, bool flip_rows, std::vector<Index>
     }
 }
 
+// Blocks of `factor` covering n samples, the last one partial: n / factor rounded up, without the n + factor - 1
+// that wraps round for a factor near SIZE_MAX.
+std::size_t blocks(std::size_t n, std::size_t factor) noexcept { return n / factor + (n % factor != 0 ? 1 : 0); }
+
 }  // namespace
 
 Image downsample_image(const Image& image, std::size_t factor) {
   check_image(image, "downsample_image");
   if (factor < 1) throw InvalidInput("downsample_image: factor must be >= 1");
   Image out;
-  out.width = (image.width + factor - 1) / factor;
-  out.height = (image.height + factor - 1) / factor;
+  out.width = blocks(image.width, factor);
+  out.height = blocks(image.height, factor);
   out.channels = image.channels;
   out.bit_depth = 8;
   out.pixels.resize(out.width * out.height * static_cast<std::size_t>(out.channels));
@@ -159,8 +163,8 @@ HeightField downsample_heightfield(const HeightField& field, std::size_t factor)
   field.validate();
   if (factor < 1) throw InvalidInput("downsample_heightfield: factor must be >= 1");
   HeightField out;
-  out.width = (field.width + factor - 1) / factor;
-  out.height = (field.height + factor - 1) / factor;
+  out.width = blocks(field.width, factor);
+  out.height = blocks(field.height, factor);
   out.spacing_x = field.spacing_x * static_cast<float>(factor);
   out.spacing_y = field.spacing_y * static_cast<float>(factor);
   out.z.resize(out.width * out.height);

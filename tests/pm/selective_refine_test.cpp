@@ -192,6 +192,18 @@ TEST(SelectiveRefine, DownsamplingAveragesBlocks) {
   EXPECT_FLOAT_EQ(half.z[1], 9.0f);
   EXPECT_FLOAT_EQ(half.spacing_x, 2.0f);
   EXPECT_THROW(downsample_image(gray_image(5, 3, px), 0), InvalidInput);
+  // A factor beyond the picture averages it all into one pixel, however large (the rounded-up division
+  // wrapped round near SIZE_MAX and gave an empty image).
+  for (const std::size_t factor : {std::size_t{5}, std::size_t{1000}, std::numeric_limits<std::size_t>::max()}) {
+    const Image one = downsample_image(gray_image(5, 3, px), factor);
+    ASSERT_EQ(one.width, 1u) << factor;
+    ASSERT_EQ(one.height, 1u) << factor;
+    EXPECT_EQ(one.pixels[0], 47) << factor;  // (200 + 100 + 100 + 50 + 250) / 15 = 46.7
+    const HeightField flat = downsample_heightfield(field, factor);
+    ASSERT_EQ(flat.width, 1u) << factor;
+    ASSERT_EQ(flat.height, 1u) << factor;
+    EXPECT_FLOAT_EQ(flat.z[0], 7.0f) << factor;
+  }
 }
 
 TEST(SelectiveRefine, FlagsReachEveryAncestorAndNothingElse) {
