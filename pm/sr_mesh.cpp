@@ -799,6 +799,27 @@ struct SrMesh::BulkScope {
 std::size_t SrMesh::refine_all() {
   const BulkScope bulk(*this);
   const std::size_t before = stats_.vsplits;
+  refine_passes();
+  return stats_.vsplits - before;
+}
+
+std::size_t SrMesh::coarsen_all() {
+  const BulkScope bulk(*this);
+  const std::size_t before = stats_.ecols;
+  coarsen_passes();
+  // Stuck above the base mesh: every collapse left is postponed by section 4.4 (a collapse gave the
+  // children of another refined node a common neighbour besides its cut vertices, and no split is coming
+  // to take it away). From the original mesh the collapses in id order are the analysis's own, each legal
+  // in turn, so refining everything and coarsening again reaches the base mesh.
+  if (num_active_ > h_->num_roots()) {
+    refine_passes();
+    coarsen_passes();
+  }
+  VARMESH_ASSERT(num_active_ == h_->num_roots());
+  return stats_.ecols - before;
+}
+
+void SrMesh::refine_passes() {
   const std::size_t lo = h_->num_leaves();
   bool progress = true;
   while (progress) {
@@ -811,12 +832,9 @@ std::size_t SrMesh::refine_all() {
       if (node_active(v) && vsplit(static_cast<Index>(v))) progress = true;
     }
   }
-  return stats_.vsplits - before;
 }
 
-std::size_t SrMesh::coarsen_all() {
-  const BulkScope bulk(*this);
-  const std::size_t before = stats_.ecols;
+void SrMesh::coarsen_passes() {
   const std::size_t n = h_->num_nodes();
   bool progress = true;
   while (progress) {
@@ -830,7 +848,6 @@ std::size_t SrMesh::coarsen_all() {
       if (collapsible(vs) && ecol(vs)) progress = true;
     }
   }
-  return stats_.ecols - before;
 }
 
 std::vector<Index> SrMesh::active_vertices() const {

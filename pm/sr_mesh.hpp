@@ -153,11 +153,13 @@ class SrMesh {
   /// than 32 vertices.
   bool can_ecol(Index vs) const;
 
-  /// Splits until every vertex is a leaf / collapses until no ecol is possible. Return the operations done.
-  /// From the original mesh coarsen_all reaches the base mesh under every scheme. From a selectively
-  /// refined mesh under Kim-Lee it may stop above it: a collapse can give the children of another refined
-  /// node a common neighbour besides its cut vertices, and when every remaining collapse is postponed so
-  /// (section 4.4 waits for a split) none is possible (reset() goes to the base mesh).
+  /// Splits until every vertex is a leaf / collapses down to the base mesh. Return the vsplits / ecols
+  /// done. From the original mesh coarsen_all's collapses are the analysis's, in its order. From a
+  /// selectively refined mesh under Kim-Lee, collapsing alone can get stuck above the base mesh: a collapse
+  /// can give the children of another refined node a common neighbour besides its cut vertices, and when
+  /// every remaining collapse is postponed so (section 4.4 waits for a split) none is possible; coarsen_all
+  /// then refines everything and collapses again (those splits are counted in stats().vsplits; reset() goes
+  /// to the base mesh without operations).
   std::size_t refine_all();
   std::size_t coarsen_all();
 
@@ -429,6 +431,8 @@ class SrMesh {
   std::vector<Index> collapsible_;  // the refined nodes whose two children are active, in no particular order
   bool track_collapsible_ = true;   // false inside refine_all/coarsen_all (see BulkScope)
   struct BulkScope;
+  void refine_passes();   // refine_all's and coarsen_all's loops, inside a BulkScope
+  void coarsen_passes();
   void suspend_collapsible();
   void rebuild_collapsible();
   std::size_t num_active_ = 0, num_faces_ = 0;
