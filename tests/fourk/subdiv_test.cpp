@@ -343,12 +343,17 @@ TEST(Subdiv, AdaptiveMtFullyRefinedIsUniformAndFrontsConform) {
 // A quad whose fan diagonal (corner 0 to corner 2) is already an edge of the mesh behind it: the Mt's
 // base triangles then used that directed edge twice, so no front was a conforming mesh (and since
 // MtBuilder checks for it, the build was refused). The fan now starts at a corner whose diagonals are new.
-TEST(Subdiv, FanDiagonalsAreNewEdges) {
+PolyMesh quad_over_its_diagonal() {
   PolyMesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.7, 0.3, -1}, {0.3, 0.7, -1}};
   for (const std::vector<Index>& face : std::vector<std::vector<Index>>{
            {0, 1, 2, 3}, {1, 0, 4}, {2, 1, 4}, {0, 2, 4}, {0, 3, 5}, {3, 2, 5}, {2, 0, 5}})
     m.add_face(face);
+  return m;
+}
+
+TEST(Subdiv, FanDiagonalsAreNewEdges) {
+  const PolyMesh m = quad_over_its_diagonal();
   ASSERT_NO_THROW(m.validate());
   for (SubdivScheme scheme : {SubdivScheme::kLinear, SubdivScheme::kCatmullClark, SubdivScheme::kFourEight}) {
     Mt mt;
@@ -456,13 +461,8 @@ TEST(Subdiv, ExtremeInputIsRejectedByName) {
 // whose fan had to start at corner 1 (FanDiagonalsAreNewEdges) used to be measured against the midpoint of
 // corners 0 and 2, the diagonal it does not split: Catmull-Clark, 2 steps, 0.133 instead of 0.185.
 TEST(Subdiv, AdaptiveNodeErrorsCoverTheSplitEdge) {
-  PolyMesh shifted;
-  shifted.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.7, 0.3, -1}, {0.3, 0.7, -1}};
-  for (const std::vector<Index>& face : std::vector<std::vector<Index>>{
-           {0, 1, 2, 3}, {1, 0, 4}, {2, 1, 4}, {0, 2, 4}, {0, 3, 5}, {3, 2, 5}, {2, 0, 5}})
-    shifted.add_face(face);
   std::vector<PolyMesh> bases = test_meshes();
-  bases.push_back(shifted);
+  bases.push_back(quad_over_its_diagonal());
   auto key = [](Index a, Index b) { return std::pair<Index, Index>{std::min(a, b), std::max(a, b)}; };
   for (const PolyMesh& base : bases)
     for (SubdivScheme scheme : {SubdivScheme::kLinear, SubdivScheme::kCatmullClark, SubdivScheme::kFourEight})
@@ -514,10 +514,6 @@ TEST(Subdiv, StencilApplyChecksSizesBeforeAllocating) {
   EXPECT_EQ(tables[0].apply(std::span<const double>(in), 3).size(), 3 * tables[0].num_outputs());
 }
 
-// The hierarchy holds every triangle of every step, about 120 bytes each: 24 binary steps of a cube make
-// about 400 M of them (some 48 GB), while the uniform mesh alone (about 10 GB by subdivide()'s estimate)
-// passed subdivide()'s check. The build would then run out of memory part of the way (estimated from the
-// measured 726 MB at 18 steps; under a 4 GB `ulimit -v` it ended in std::bad_alloc); refused by name now.
 // A base beyond float's range (validate() takes coordinates up to 1e300) is refused naming its vertex; the
 // builder used to say that some subdivided vertex's position was not finite.
 TEST(Subdiv, AdaptiveMtRefusesABaseBeyondFloatRange) {
@@ -535,16 +531,26 @@ TEST(Subdiv, AdaptiveMtRefusesABaseBeyondFloatRange) {
   EXPECT_NO_THROW((void)build_subdivision_mt(cube, SubdivScheme::kCatmullClark, 1));
 }
 
-TEST(Subdiv, AdaptiveMtTooLargeForMemoryIsRefusedBeforeAllocating) {
-  const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
-  if (ram > 44e9) GTEST_SKIP() << "more than 44 GB of memory here: 24 steps would not be refused";
+// `make(steps)` on a 4-8 cube is refused as needing more memory than the machine has, naming `steps`.
+template <typename Make>
+void expect_refused_for_memory(const Make& make, int steps) {
   try {
-    (void)build_subdivision_mt(make_quad_cube(), SubdivScheme::kFourEight, 24);
+    (void)make(steps);
     ADD_FAILURE() << "no throw";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("GB of memory here (steps)"), std::string::npos) << e.what();
-    EXPECT_EQ(e.element(), 24u);
+    EXPECT_EQ(e.element(), static_cast<std::uint64_t>(steps));
   }
+}
+
+// The hierarchy holds every triangle of every step, about 120 bytes each: 24 binary steps of a cube make
+// about 400 M of them (some 48 GB), while the uniform mesh alone (about 10 GB by subdivide()'s estimate)
+// passed subdivide()'s check. The build would then run out of memory part of the way (estimated from the
+// measured 726 MB at 18 steps; under a 4 GB `ulimit -v` it ended in std::bad_alloc); refused by name now.
+TEST(Subdiv, AdaptiveMtTooLargeForMemoryIsRefusedBeforeAllocating) {
+  const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  if (ram > 44e9) GTEST_SKIP() << "more than 44 GB of memory here: 24 steps would not be refused";
+  expect_refused_for_memory([](int steps) { return build_subdivision_mt(make_quad_cube(), SubdivScheme::kFourEight, steps); }, 24);
 }
 
 // The stencil tables of every step take about 240 bytes per final position: 25 binary steps of a cube
@@ -554,13 +560,7 @@ TEST(Subdiv, AdaptiveMtTooLargeForMemoryIsRefusedBeforeAllocating) {
 TEST(Subdiv, StencilTablesTooLargeForMemoryAreRefusedBeforeAllocating) {
   const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
   if (ram > 44e9) GTEST_SKIP() << "more than 44 GB of memory here: 25 steps would not be refused";
-  try {
-    (void)subdiv_stencil_tables(make_quad_cube(), SubdivScheme::kFourEight, 25);
-    ADD_FAILURE() << "no throw";
-  } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("GB of memory here (steps)"), std::string::npos) << e.what();
-    EXPECT_EQ(e.element(), 25u);
-  }
+  expect_refused_for_memory([](int steps) { return subdiv_stencil_tables(make_quad_cube(), SubdivScheme::kFourEight, steps); }, 25);
 }
 
 }  // namespace
