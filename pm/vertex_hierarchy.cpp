@@ -57,7 +57,7 @@ std::size_t VertexHierarchy::memory_bytes() const noexcept {
 }
 
 // The checks of finish() that only an untrusted Raw needs (a file's): the maps back to the input, the repair
-// report's sums, finite positions inside their own spheres, and the leaves' spheres holding their faces.
+// report's counts, finite positions inside their own spheres, and the leaves' spheres holding their faces.
 namespace {
 
 void check_untrusted(const VertexHierarchyBuilder::Raw& raw) {

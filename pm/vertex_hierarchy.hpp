@@ -261,7 +261,7 @@ class VertexHierarchyBuilder {
   /// checks the result with VertexHierarchy::validate() (std::logic_error): the file reader does; the
   /// analysis, whose records hold these invariants by construction, does so in debug builds only (its tests
   /// validate every hierarchy they build). `trusted` skips the checks that only the reader of an untrusted
-  /// file needs (the maps back to the input, the repair report's sums, finite positions inside their
+  /// file needs (the maps back to the input, the repair report's counts, finite positions inside their
   /// spheres, leaves' spheres holding their faces, Hoppe's and Xia-Varshney's references): the analysis sets
   /// it, having built those by construction; sizes, the tree and the keys are checked in any case.
   static VertexHierarchy finish(Raw raw, bool validate = true, bool trusted = false);
