@@ -1,18 +1,43 @@
 #pragma once
 // Small generated meshes for the pm tests: runnable anywhere (no shared data needed).
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <map>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
 #include "multitri/shapes.hpp"
 #include "multitri/tri_mesh.hpp"
+#include "pm/dual_pieces.hpp"
+#include "pm/sr_mesh.hpp"
 
 namespace varmesh::testing {
 
 using varmesh::make_icosphere;
 using varmesh::make_torus;
+
+/// "" when the SrMesh's faces are exactly those its active set defines through dual pieces (pm/dual_pieces.hpp:
+/// the same original faces on the same corners, in the same cyclic order); else what differs first.
+inline std::string differs_from_dual_pieces(const SrMesh& sr) {
+  const VertexHierarchy& h = sr.hierarchy();
+  std::vector<std::uint8_t> active(h.num_nodes(), 0);
+  for (Index v : sr.active_vertices()) active[v] = 1;
+  const auto ref = dual_piece_mesh(h, active_ancestors(h, active));
+  if (ref.size() != sr.num_faces()) return "face count " + std::to_string(sr.num_faces()) + " vs " + std::to_string(ref.size());
+  auto rot = [](std::array<Index, 3> c) {
+    while (c[0] > c[1] || c[0] > c[2]) c = {c[1], c[2], c[0]};
+    return c;
+  };
+  for (const DualPieceFace& f : ref) {
+    if (!sr.face_active(f.original)) return "face " + std::to_string(f.original) + " inactive";
+    if (rot(sr.face(f.original)) != rot(f.corners)) return "face " + std::to_string(f.original) + " corners differ";
+  }
+  return "";
+}
 
 /// Regular grid of (n+1) x (m+1) vertices on z = f(x, y) over [0,1]^2, alternating diagonals; has a border.
 inline TriMesh make_grid(int n, int m, float bump = 0.2f) {

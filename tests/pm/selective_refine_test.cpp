@@ -26,6 +26,8 @@
 namespace varmesh {
 namespace {
 
+using testing::differs_from_dual_pieces;
+
 constexpr std::array<RefinementScheme, 3> kSchemes = {RefinementScheme::kKimLee, RefinementScheme::kHoppe97,
                                                       RefinementScheme::kXiaVarshney};
 
@@ -38,24 +40,6 @@ Image gray_image(std::size_t w, std::size_t h, const std::vector<std::uint8_t>& 
   return img;
 }
 
-// "" when the SrMesh's faces are exactly those its active set defines through dual pieces.
-std::string differs_from_dual_pieces(const SrMesh& sr) {
-  const VertexHierarchy& h = sr.hierarchy();
-  std::vector<std::uint8_t> active(h.num_nodes(), 0);
-  for (Index v : sr.active_vertices()) active[v] = 1;
-  const auto ref = dual_piece_mesh(h, active_ancestors(h, active));
-  if (ref.size() != sr.num_faces()) return "face count " + std::to_string(sr.num_faces()) + " vs " + std::to_string(ref.size());
-  for (const DualPieceFace& f : ref) {
-    if (!sr.face_active(f.original)) return "face " + std::to_string(f.original) + " inactive";
-    auto a = sr.face(f.original), b = f.corners;
-    auto rot = [](std::array<Index, 3> c) {
-      while (c[0] > c[1] || c[0] > c[2]) c = {c[1], c[2], c[0]};
-      return c;
-    };
-    if (rot(a) != rot(b)) return "face " + std::to_string(f.original) + " corners differ";
-  }
-  return "";
-}
 
 struct Outcome {
   std::size_t vertices = 0, faces = 0;
