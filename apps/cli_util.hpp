@@ -1,6 +1,7 @@
 #pragma once
-// Small helpers shared by the subcommands: parsing "x,y,z" lists, timing, progress on stderr.
+// Small helpers shared by the subcommands: counts in words, parsing "x,y,z" lists, timing, progress on stderr.
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -23,6 +24,14 @@ class Option;
 }  // namespace CLI
 
 namespace varmesh::app {
+
+/// `n` and `noun` in the number that agrees with n: "1 triangle", "0 triangles", "2 triangles". Only the last
+/// word of `noun` changes ("binary step" -> "binary steps", "vertex copy" -> "vertex copies"), by the rules
+/// the commands' nouns need: vertex -> vertices, leaf -> leaves, a consonant and y -> ies, s, x, z, ch and sh
+/// -> es, else an s. `noun` is the singular, in lower case.
+std::string count_noun(std::uint64_t n, std::string_view noun);
+/// The noun alone, in the number that agrees with n ("triangle" for 1, "triangles" otherwise).
+std::string noun_for(std::uint64_t n, std::string_view noun);
 
 /// Parses comma-separated numbers; throws InvalidInput naming the option on a bad list or count.
 std::vector<float> parse_floats(const std::string& text, const std::string& option, std::size_t count);

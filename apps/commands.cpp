@@ -16,7 +16,10 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/trigonometric.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec4.hpp>
 
 #include "apps/cli_util.hpp"
 #include "apps/compare.hpp"
@@ -34,6 +37,24 @@
 #include "multitri/query.hpp"
 
 namespace varmesh::app {
+
+std::string noun_for(std::uint64_t n, std::string_view noun) {
+  std::string s(noun);
+  if (n == 1 || s.empty()) return s;
+  const std::size_t start = s.find_last_of(' ') + 1;  // npos + 1 = 0: a single word
+  const std::string_view last = std::string_view(s).substr(start);
+  auto ends_with = [&last](std::string_view tail) {
+    return last.size() >= tail.size() && last.compare(last.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  const auto is_vowel = [](char c) { return c == 'a' || c == 'e' || c == 'i' || c == 'o' || c == 'u'; };
+  if (last == "vertex") return s.substr(0, start) + "vertices";
+  if (last == "leaf") return s.substr(0, start) + "leaves";
+  if (last.size() >= 2 && last.back() == 'y' && !is_vowel(last[last.size() - 2])) return s.substr(0, s.size() - 1) + "ies";
+  if (ends_with("s") || ends_with("x") || ends_with("z") || ends_with("ch") || ends_with("sh")) return s + "es";
+  return s + "s";
+}
+
+std::string count_noun(std::uint64_t n, std::string_view noun) { return std::to_string(n) + " " + noun_for(n, noun); }
 
 std::vector<float> parse_floats(const std::string& text, const std::string& option, std::size_t count) {
   std::vector<float> out;
@@ -664,8 +685,8 @@ int cmd_terrain(const TerrainArgs& a) {
   write_mesh_and_picture(a.output, mesh, a.png, a.png.empty() ? nullptr : &picture);
   std::printf("grid %zux%zu (lattice %zux%zu, tile %zu), hierarchy %.1f MB built in %.1f ms\n", field.width, field.height,
               grid.lattice_width(), grid.lattice_height(), grid.tile_size(), double(grid.memory_bytes()) / 1e6, build_ms);
-  std::printf("extracted %zu triangles, %zu vertices in %.2f ms (mesh included) -> %s\n", mesh.num_faces(), mesh.num_vertices(),
-              extract_ms, a.output.c_str());
+  std::printf("extracted %s, %s in %.2f ms (mesh included) -> %s\n", count_noun(mesh.num_faces(), "triangle").c_str(),
+              count_noun(mesh.num_vertices(), "vertex").c_str(), extract_ms, a.output.c_str());
   if (a.budget > 0 && mesh.num_faces() > a.budget)
     std::printf("note: the coarsest mesh of this grid has %zu triangles, more than --budget %zu\n", mesh.num_faces(), a.budget);
   if (a.measure) std::printf("measured max vertical error over all samples: %.6g\n", grid.max_vertical_error(mesh));
@@ -684,6 +705,46 @@ std::string xyz(const glm::vec3& v) {
   std::snprintf(buf, sizeof buf, "%g,%g,%g", double(v.x), double(v.y), double(v.z));
   return buf;
 }
+
+// What a face's corners project to in a `width` x `height` picture through `cam` (its aspect made the
+// picture's, as render_mesh does): the largest face's area in square pixels and the extent of the faces'
+// corners in pixels. Faces with a corner behind the eye are left out; the default views have none.
+struct ProjectedSize {
+  double largest_face = 0.0;
+  glm::dvec2 extent{0.0};
+};
+
+ProjectedSize projected_size(const TriMesh& mesh, Camera cam, int width, int height) {
+  cam.aspect = float(width) / float(height);
+  const glm::dmat4 clip_from_world = glm::dmat4(cam.projection()) * glm::dmat4(cam.view());
+  ProjectedSize r;
+  glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    glm::dvec2 p[3];
+    bool in_front = true;
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec4 c = clip_from_world * glm::dvec4(glm::dvec3(mesh.positions[mesh.corner(f, k)]), 1.0);
+      in_front = in_front && c.w > 0.0;
+      p[k] = {(c.x / c.w + 1.0) * 0.5 * width, (c.y / c.w + 1.0) * 0.5 * height};
+    }
+    if (!in_front) continue;
+    const glm::dvec2 u = p[1] - p[0], v = p[2] - p[0];
+    r.largest_face = std::max(r.largest_face, 0.5 * std::abs(u.x * v.y - u.y * v.x));
+    for (const glm::dvec2& q : p) {
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+  }
+  if (lo.x <= hi.x) r.extent = hi - lo;
+  return r;
+}
+
+// A default view that shows nothing is blamed on the picture rather than the mesh when the picture is
+// under kSmallPicture pixels on its shorter side and, in the same view on a picture enlarged to that side,
+// the largest face would cover kFewPixels square pixels: there the frame is too coarse for faces of a fair
+// size (a one-triangle mesh in a 1024 x 1 picture), not the faces too small for the frame.
+constexpr int kSmallPicture = 256;
+constexpr double kFewPixels = 8.0;
 
 int cmd_render(const RenderArgs& a) {
   if (a.output.empty()) throw InvalidInput("render: -o must end in .png");
@@ -736,9 +797,21 @@ int cmd_render(const RenderArgs& a) {
   // A camera that sees none of the mesh (a --target or --eye away from it) gave a white picture and
   // "rendered N triangles": refused, nothing written.
   const std::size_t drawn = pixels_unlike(picture, o.background);
-  // The default view frames the whole bounding box: when it shows nothing, the faces are far smaller than
+  // The default view frames the whole bounding box: when it shows nothing, either the picture is too small
+  // for faces of a fair size (a 1024 x 1 picture blamed the mesh for it) or the faces are far smaller than
   // the box (a stray vertex far away), which the camera's position did not say.
   if (drawn == 0 && a.eye.empty() && a.target.empty()) {
+    const int shorter = std::min(a.width, a.height);
+    const ProjectedSize size = projected_size(mesh, cam, a.width, a.height);
+    const double grow = double(kSmallPicture) / double(shorter);
+    if (shorter < kSmallPicture && size.largest_face * grow * grow >= kFewPixels) {
+      char extent[64];
+      std::snprintf(extent, sizeof extent, "%.2g x %.2g", size.extent.x, size.extent.y);
+      throw InvalidInput("render: the picture, " + std::to_string(a.width) + " x " + std::to_string(a.height) +
+                         " pixels, is too small to show the mesh: the mesh spans about " + extent +
+                         " pixels in it and no face covers a pixel's centre; give a larger " +
+                         (a.height == shorter ? "--height" : "--width") + "; nothing was written");
+    }
     Box3 box;
     for (Index i : mesh.indices) box.add(mesh.positions[i]);
     throw IoError(a.input, "no face covers a pixel of the default view, which frames the bounding box of the faces (" +
@@ -750,8 +823,8 @@ int cmd_render(const RenderArgs& a) {
     throw InvalidInput("render: the camera sees none of the mesh (eye " + xyz(cam.eye) + ", target " + xyz(cam.target) +
                        "): the picture would be empty; nothing was written");
   write_png(a.output, picture);
-  std::printf("rendered %zu triangles -> %s (%.1f %% of the pixels show the mesh)\n", mesh.num_faces(), a.output.c_str(),
-              100.0 * double(drawn) / double(picture.width * picture.height));
+  std::printf("rendered %s -> %s (%.1f %% of the pixels show the mesh)\n", count_noun(mesh.num_faces(), "triangle").c_str(),
+              a.output.c_str(), 100.0 * double(drawn) / double(picture.width * picture.height));
   return 0;
 }
 

@@ -560,7 +560,7 @@ CaseInput model_case(const Options& o, const std::string& name) {
   // the model ("frame_sphere: radius 0.000000 is not a positive number", naming no file).
   if (!(radius > 0.0f))
     throw IoError(c.file, "the model has no size: every vertex of its faces lies at one point (" +
-                              std::to_string(c.mesh.num_faces()) + " faces)");
+                              count_noun(c.mesh.num_faces(), "face") + ")");
   c.view = c.backface = true;
   c.view_cam.target = centre + spec.target_offset * radius;
   c.view_cam.eye = c.view_cam.target + glm::normalize(spec.view_dir) * (1.4f * radius);
@@ -627,13 +627,15 @@ std::string diagnose(const CaseResult& r, const std::vector<std::uint8_t>& needs
     << " needed by the criterion, " << a_only - a_only_needed << " not needed: forced or degenerate-case splits); split by "
     << scheme_name(b) << " only: " << b_only << " (" << b_only_needed << " needed).\n";
   if (!rb.result.complete())
-    s << "  " << scheme_name(b) << " is incomplete: " << rb.result.unsatisfied << " active nodes still need refinement after "
-      << rb.result.refused_vsplits << " refused vsplits (dependency cycles), so its mesh lacks required vertices.\n";
+    s << "  " << scheme_name(b) << " is incomplete: " << count_noun(rb.result.unsatisfied, "active node")
+      << (rb.result.unsatisfied == 1 ? " still needs" : " still need") << " refinement after "
+      << count_noun(rb.result.refused_vsplits, "refused vsplit") << " (dependency cycles), so its mesh lacks required vertices.\n";
   if (ra.result.stats.degenerate_cases > 0)
-    s << "  " << scheme_name(a) << " met " << ra.result.stats.degenerate_cases << " degenerate cases (Kim-Lee 4.4 pre-splits count here).\n";
+    s << "  " << scheme_name(a) << " met " << count_noun(ra.result.stats.degenerate_cases, "degenerate case")
+      << " (Kim-Lee 4.4 pre-splits count here).\n";
   if (rb.result.stats.forced_ecols > 0)
-    s << "  " << scheme_name(b) << " collapsed " << rb.result.stats.forced_ecols
-      << " vertices to satisfy its rule (forced ecols), which removes vertices another scheme keeps.\n";
+    s << "  " << scheme_name(b) << " collapsed " << count_noun(rb.result.stats.forced_ecols, "vertex")
+      << " to satisfy its rule (forced ecols), which removes vertices another scheme keeps.\n";
   if (ra.faces > rb.faces && ra.vertices <= rb.vertices)
     s << "  Same or fewer vertices but more faces: #F - 2 #V depends on the border length of the active mesh (Euler), and "
       << scheme_name(a) << "'s finer border is longer.\n";
@@ -853,7 +855,7 @@ CaseResult run_case(CaseInput in, const Options& o, bool& failed) {
           put_pixel(img, static_cast<long>(x), static_cast<long>(y), feat ? glm::vec3(0.9f, 0.05f, 0.05f) : glm::vec3(k == 1 ? 0.4f + 0.6f * g : g));
         }
       label_panel(img, {k == 0 ? std::string("input ") + std::to_string(pic.width) + " x " + std::to_string(pic.height)
-                               : std::to_string(r.in.features.size()) + " sobel features"});
+                               : count_noun(r.in.features.size(), "sobel feature")});
       two.push_back(std::move(img));
     }
     write_output_png(o, "image_features.png", compose(two, 2));
@@ -1030,7 +1032,7 @@ static int run_compare_in(const Options& o) {
     std::printf("%-8s %s, %s: %s; original %zu V %zu F (input %zu V %zu F), base %zu V %zu F, analysis %.0f ms", r.in.name.c_str(),
                 r.in.type.c_str(), r.in.criteria.c_str(), r.in.source.c_str(), r.original_vertices, r.original_faces,
                 r.input_vertices, r.input_faces, r.base_vertices, r.base_faces, r.analysis_ms);
-    if (!r.in.features.empty()) std::printf("; %zu feature pixels", r.in.features.size());
+    if (!r.in.features.empty()) std::printf("; %s", count_noun(r.in.features.size(), "feature pixel").c_str());
     std::printf("\n");
   }
   std::printf("\n");
@@ -1046,8 +1048,9 @@ static int run_compare_in(const Options& o) {
      << (o.cost == CollapseCost::kLindstromTurk ? " (the image case's colour quadrics stay Garland-Heckbert)" : "") << ".\n\n";
   for (const CaseResult& r : results)
     md << "- **" << r.in.name << "** (" << r.in.type << ", " << r.in.criteria << "): " << r.in.source << "; original "
-       << r.original_vertices << " V " << r.original_faces << " F, base " << r.base_vertices << " V, " << r.required
-       << " nodes need splitting" << (r.in.features.empty() ? "" : ", " + std::to_string(r.in.features.size()) + " feature pixels")
+       << r.original_vertices << " V " << r.original_faces << " F, base " << r.base_vertices << " V, "
+       << count_noun(r.required, "node") << (r.required == 1 ? " needs" : " need") << " splitting"
+       << (r.in.features.empty() ? "" : ", " + count_noun(r.in.features.size(), "feature pixel"))
        << "\n";
   md << '\n' << markdown_table(results) << '\n';
   for (const CaseResult& r : results) md << "- " << r.ordering_line << '\n';
@@ -1077,9 +1080,10 @@ static int run_compare_in(const Options& o) {
   for (const CaseResult& r : results)
     if (r.base_vertices * 20 > r.original_vertices)
       notes << "- " << r.in.name << ": the base mesh keeps " << r.base_vertices << " of " << r.original_vertices
-            << " vertices: the input needed repair (" << r.dropped_faces << " duplicate or degenerate faces dropped, "
-            << r.detached_faces << " faces detached from non-manifold edges, " << r.repaired_copies
-            << " vertex copies), and the analysis stops early on the result (the border vertices of the detached pieces make "
+            << " vertices: the input needed repair (" << count_noun(r.dropped_faces, "duplicate or degenerate face")
+            << " dropped, " << count_noun(r.detached_faces, "face") << " detached from non-manifold edges, "
+            << count_noun(r.repaired_copies, "vertex copy")
+            << "), and the analysis stops early on the result (the border vertices of the detached pieces make "
                "its link condition refuse most remaining collapses, and every piece keeps at least 4 vertices); all schemes "
                "share that base, so the comparison still holds, but every count starts higher.\n";
   write_text(o, "compare_notes.md", notes.str());

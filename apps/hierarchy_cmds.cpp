@@ -158,7 +158,7 @@ AdaptiveHierarchy restate_adaptive_refusal(const AdaptiveOptions& o, bool levels
     std::snprintf(tol, sizeof tol, "%g", static_cast<double>(o.tolerance));
     if (what.find("not met at max_level") != std::string::npos)
       throw InvalidInput("build --method adaptive: --tolerance " + std::string(tol) + " is not met within " +
-                         std::to_string(o.max_level) + " levels" + (levels_given ? "" : " (the default --levels)") +
+                         count_noun(std::uint64_t(o.max_level), "level") + (levels_given ? "" : " (the default --levels)") +
                          ": raise --levels (at most 48) or --tolerance, or check that the surface is continuous");
     if (what.find("max_faces") != std::string::npos)
       throw InvalidInput("build --method adaptive: --tolerance " + std::string(tol) + " needs more than " +
@@ -201,8 +201,9 @@ AdaptiveHierarchy build_adaptive(const BuildArgs& a) {
 
 void print_metrics(const Mt& mt, bool semiregular = false) {
   const MtMetrics m = compute_metrics(mt);
-  std::printf("hierarchy: %zu nodes, %zu faces (%zu coarsest, %zu finest), %zu vertices, depth %zu, growth %.3f, %.1f bytes per finest face\n",
-              m.nodes, m.faces, m.coarsest_faces, m.finest_faces, mt.num_vertices(), m.depth, m.growth_rate,
+  std::printf("hierarchy: %s, %s (%zu coarsest, %zu finest), %s, depth %zu, growth %.3f, %.1f bytes per finest face\n",
+              count_noun(m.nodes, "node").c_str(), count_noun(m.faces, "face").c_str(), m.coarsest_faces, m.finest_faces,
+              count_noun(mt.num_vertices(), "vertex").c_str(), m.depth, m.growth_rate,
               double(mt.memory_bytes()) / double(std::max<std::size_t>(1, m.finest_faces)));
   // Semi-regular 4-8 structures: the chain growth of mt_metrics.hpp beside eq. 5's value with n = |K0|/2
   // (README: a constructed reading of Velho-Gomes 3.3; not the paper's own n).
@@ -261,15 +262,19 @@ bool hierarchy_info(const std::string& path) {
     const InputRepairReport& r = h.repair_report();
     std::printf("%s: progressive-mesh vertex hierarchy (.vmh, format %u, %zu bytes), loaded and validated in %.1f ms\n",
                 path.c_str(), kVertexHierarchyFormatVersion, static_cast<std::size_t>(file_bytes), ms);
-    std::printf("input %zu vertices, %zu faces; repaired: %zu unreferenced vertices, %zu degenerate and %zu duplicate "
-                "faces dropped, %zu vertex copies added (%zu non-manifold edge faces, %zu non-manifold vertices), %zu "
+    std::printf("input %s, %s; repaired: %s, %zu degenerate and %zu duplicate faces dropped, %s added (%s, %s), %zu "
                 "locked\n",
-                r.input_vertices, r.input_faces, r.unreferenced_vertices, r.degenerate_faces, r.duplicate_faces,
-                r.added_vertex_copies, r.nonmanifold_edge_faces, r.nonmanifold_vertices, r.locked_vertices);
-    std::printf("%zu leaves, %zu faces, %zu collapses (%zu nodes) down to a base mesh of %zu vertices, %zu faces; %zu "
-                "trees, depth %d; colours %s; %.1f bytes per original face in memory\n",
-                h.num_leaves(), h.num_faces(), h.num_collapses(), h.num_nodes(), h.num_roots(), h.base_faces().size(),
-                h.num_roots(), h.max_depth(), h.has_colors() ? "yes" : "no",
+                count_noun(r.input_vertices, "vertex").c_str(), count_noun(r.input_faces, "face").c_str(),
+                count_noun(r.unreferenced_vertices, "unreferenced vertex").c_str(), r.degenerate_faces, r.duplicate_faces,
+                count_noun(r.added_vertex_copies, "vertex copy").c_str(),
+                count_noun(r.nonmanifold_edge_faces, "non-manifold edge face").c_str(),
+                count_noun(r.nonmanifold_vertices, "non-manifold vertex").c_str(), r.locked_vertices);
+    std::printf("%s, %s, %s (%s) down to a base mesh of %s, %s; %s, depth %d; colours %s; %.1f bytes per original face "
+                "in memory\n",
+                count_noun(h.num_leaves(), "leaf").c_str(), count_noun(h.num_faces(), "face").c_str(),
+                count_noun(h.num_collapses(), "collapse").c_str(), count_noun(h.num_nodes(), "node").c_str(),
+                count_noun(h.num_roots(), "vertex").c_str(), count_noun(h.base_faces().size(), "face").c_str(),
+                count_noun(h.num_roots(), "tree").c_str(), h.max_depth(), h.has_colors() ? "yes" : "no",
                 double(h.memory_bytes()) / double(std::max<std::size_t>(1, h.num_faces())));
     Box3 box;
     for (std::size_t v = 0; v < h.num_leaves(); ++v) box.add(h.position(static_cast<Index>(v)));
@@ -410,7 +415,7 @@ void check_semiregular_size(const BuildArgs& a, std::size_t base_faces, int leve
   const std::string given = a.levels < 0 ? "the default --levels 4" : "--levels " + std::to_string(levels);
   char count[48];
   std::snprintf(count, sizeof count, "%.4g", finest);
-  std::string text = "build: " + given + " on the " + std::to_string(base_faces) + " faces of '" + a.input +
+  std::string text = "build: " + given + " on the " + count_noun(base_faces, "face") + " of '" + a.input +
                      "' would make " + count + " faces in the finest mesh (" + std::to_string(base_faces) + " x 2^" +
                      std::to_string(levels) + "), more than --max-triangles " + std::to_string(a.max_triangles) +
                      " (about 250 bytes each at the peak): lower --levels";
@@ -443,7 +448,8 @@ void write_hierarchy_and_pictures(const BuildArgs& a, const Mt& mt, const std::v
                  for (const Picture& p : pictures) write_png(folder.path(p.name), p.image);
                  folder.commit();
                });
-  for (const Picture& p : pictures) std::printf("  %s: %zu faces\n", (fs::path(a.pictures) / p.name).string().c_str(), p.faces);
+  for (const Picture& p : pictures)
+    std::printf("  %s: %s\n", (fs::path(a.pictures) / p.name).string().c_str(), count_noun(p.faces, "face").c_str());
 }
 
 }  // namespace
@@ -468,7 +474,8 @@ int run_build(const BuildArgs& a) {
   std::vector<Picture> pictures;
   if (a.method == "adaptive") {
     AdaptiveHierarchy h = build_adaptive(a);
-    std::printf("adaptive: %zu base faces, %zu faces at the tolerance, max level %d\n", h.num_base_faces, h.num_finest_faces, h.max_level);
+    std::printf("adaptive: %s, %s at the tolerance, max level %d\n", count_noun(h.num_base_faces, "base face").c_str(),
+                count_noun(h.num_finest_faces, "face").c_str(), h.max_level);
     if (!a.pictures.empty()) {
       MtFront fine(h.mt);
       for (NodeId n = 1; n < h.mt.num_nodes(); ++n) fine.refine(n);
@@ -502,8 +509,9 @@ int run_build(const BuildArgs& a) {
     const std::string leftovers = info.matching.num_leftovers == 0
                                       ? std::string()
                                       : " (" + std::to_string(info.matching.num_leftovers) + " left over, split 1->2 on the border)";
-    std::printf("semiregular: %zu base faces paired into %zu blocks%s, %d levels\n", base.num_faces(),
-                info.matching.num_pairs, leftovers.c_str(), levels);
+    std::printf("semiregular: %s paired into %s%s, %s\n", count_noun(base.num_faces(), "base face").c_str(),
+                count_noun(info.matching.num_pairs, "block").c_str(), leftovers.c_str(),
+                count_noun(std::uint64_t(levels), "level").c_str());
     if (!a.pictures.empty()) {
       const Camera cam = chosen_camera(base, a.up, a.view);
       MtFront front(mt);
@@ -526,8 +534,8 @@ int run_build(const BuildArgs& a) {
         throw IoError(a.input, e.what());
       }
     }();
-    std::printf("simplify4k: %zu levels, %zu split nodes, %zu swap nodes; faces per level:", r.num_levels(), r.num_split_nodes,
-                r.num_swap_nodes);
+    std::printf("simplify4k: %s, %s, %s; faces per level:", count_noun(r.num_levels(), "level").c_str(),
+                count_noun(r.num_split_nodes, "split node").c_str(), count_noun(r.num_swap_nodes, "swap node").c_str());
     for (const Simplify4kLevel& l : r.levels) std::printf(" %zu", l.faces);
     std::printf("\n");
     if (!a.pictures.empty()) {
@@ -610,8 +618,9 @@ int run_query(const QueryArgs& a) {
       if (!finest.is_applied(n)) finest.apply(n);
     return finest.to_mesh();
   });
-  std::printf("front: %zu triangles, %zu vertices (%zu nodes refined%s) in %.2f ms -> %s\n", mesh.num_faces(), mesh.num_vertices(),
-              st.refined, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  std::printf("front: %s, %s (%s refined%s) in %.2f ms -> %s\n", count_noun(mesh.num_faces(), "triangle").c_str(),
+              count_noun(mesh.num_vertices(), "vertex").c_str(), count_noun(st.refined, "node").c_str(),
+              st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
   if (distance) print_distance("result", *distance, "finest mesh");
   return 0;
 }
@@ -673,7 +682,7 @@ void print_target_note(const PmBuildArgs& a, const QemStats& st, const VertexHie
   auto add = [&why](std::size_t n, const std::string& what) {
     if (n > 0) why += (why.empty() ? "" : ", ") + std::to_string(n) + " " + what;
   };
-  add(st.rejected_error, "were over --max-error");
+  add(st.rejected_error, st.rejected_error == 1 ? "was over --max-error" : "were over --max-error");
   add(st.rejected_link, "failed the link condition");
   add(st.rejected_flip, "would flip or degenerate a face");
   add(st.rejected_locked, "touched locked vertices (--non-manifold lock)");
@@ -685,7 +694,7 @@ void print_target_note(const PmBuildArgs& a, const QemStats& st, const VertexHie
     text += "; the base mesh is " + std::to_string(pieces) + " separate pieces";
     if (h.repair_report().added_vertex_copies > 0)
       text += " (the repair cut the input at its non-manifold edges and vertices: " +
-              std::to_string(h.repair_report().added_vertex_copies) + " vertex copies)";
+              count_noun(h.repair_report().added_vertex_copies, "vertex copy") + ")";
     text += ", and no piece goes below 4 vertices";
   }
   std::printf("%s\n", text.c_str());
@@ -748,15 +757,17 @@ int run_pm_build(const PmBuildArgs& a) {
   if (a.measure) distance = vertex_to_surface_distance(mesh, mesh_after_collapses(h, h.num_collapses()));
   write_vertex_hierarchy(a.output, h);
   const InputRepairReport& r = h.repair_report();
-  std::printf("input %zu vertices, %zu faces; repaired: %zu unreferenced vertices, %zu degenerate and %zu duplicate "
-              "faces dropped, %zu vertex copies added\n",
-              r.input_vertices, r.input_faces, r.unreferenced_vertices, r.degenerate_faces, r.duplicate_faces,
-              r.added_vertex_copies);
+  std::printf("input %s, %s; repaired: %s, %zu degenerate and %zu duplicate faces dropped, %s added\n",
+              count_noun(r.input_vertices, "vertex").c_str(), count_noun(r.input_faces, "face").c_str(),
+              count_noun(r.unreferenced_vertices, "unreferenced vertex").c_str(), r.degenerate_faces, r.duplicate_faces,
+              count_noun(r.added_vertex_copies, "vertex copy").c_str());
   const std::string over = a.max_error >= 0.0f ? ", " + std::to_string(st.rejected_error) + " over --max-error" : "";
-  std::printf("%zu collapses (rejected: %zu link, %zu flip%s) down to a base mesh of %zu vertices, %zu faces; %zu trees, "
-              "depth %d; %.1f bytes per original face; %.3f s -> %s\n",
-              st.collapses, st.rejected_link, st.rejected_flip, over.c_str(), st.base_vertices, st.base_faces, h.num_roots(),
-              h.max_depth(), double(h.memory_bytes()) / double(h.num_faces()), st.seconds, a.output.c_str());
+  std::printf("%s (rejected: %zu link, %zu flip%s) down to a base mesh of %s, %s; %s, depth %d; %.1f bytes per original "
+              "face; %.3f s -> %s\n",
+              count_noun(st.collapses, "collapse").c_str(), st.rejected_link, st.rejected_flip, over.c_str(),
+              count_noun(st.base_vertices, "vertex").c_str(), count_noun(st.base_faces, "face").c_str(),
+              count_noun(h.num_roots(), "tree").c_str(), h.max_depth(), double(h.memory_bytes()) / double(h.num_faces()),
+              st.seconds, a.output.c_str());
   if (st.lt_finished && st.collapses > st.lt_finish_from)
     std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,
                 st.collapses, a.lt_finish);
@@ -779,9 +790,10 @@ int run_pm_query(const PmQueryArgs& a) {
   SrMesh sr(h, scheme);
   const auto [st, mesh, ms, distance] = extract_and_write(sr, parts, a, [&] { return input_mesh_of(h); });
   const SrStats& s = sr.stats();
-  std::printf("%s: %zu vertices, %zu triangles (%zu vsplits, %zu forced, %zu ecols, %zu forced, #DC %zu%s) in %.2f ms -> %s\n",
-              scheme_name(scheme), mesh.num_vertices(), mesh.num_faces(), s.vsplits, s.forced_vsplits, s.ecols,
-              s.forced_ecols, s.degenerate_cases, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  std::printf("%s: %s, %s (%s, %zu forced, %s, %zu forced, #DC %zu%s) in %.2f ms -> %s\n", scheme_name(scheme),
+              count_noun(mesh.num_vertices(), "vertex").c_str(), count_noun(mesh.num_faces(), "triangle").c_str(),
+              count_noun(s.vsplits, "vsplit").c_str(), s.forced_vsplits, count_noun(s.ecols, "ecol").c_str(), s.forced_ecols,
+              s.degenerate_cases, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
   if (distance) print_distance("result", *distance, "input");
   return 0;
 }

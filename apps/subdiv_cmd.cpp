@@ -24,6 +24,7 @@
 #include <glm/vec2.hpp>
 
 #include "apps/cli_util.hpp"
+#include "apps/file_faces.hpp"
 #include "apps/render.hpp"
 #include "fourk/poly_mesh.hpp"
 #include "fourk/subdiv.hpp"
@@ -173,18 +174,17 @@ std::string face_summary(const PolyMesh& m) {
     tris += m.face_size(f) == 3;
     quads += m.face_size(f) == 4;
   }
-  std::string s = std::to_string(m.num_faces()) + " faces (" + std::to_string(quads) + " quads";
-  if (tris) s += ", " + std::to_string(tris) + " triangles";
-  if (m.num_faces() > tris + quads) s += ", " + std::to_string(m.num_faces() - tris - quads) + " larger polygons";
+  std::string s = count_noun(m.num_faces(), "face") + " (" + count_noun(quads, "quad");
+  if (tris) s += ", " + count_noun(tris, "triangle");
+  if (m.num_faces() > tris + quads) s += ", " + count_noun(m.num_faces() - tris - quads, "larger polygon");
   return s + ")";
 }
 
 PolyMesh paired(const std::string& name, const TriMesh& t, std::string* description) {
   std::size_t left = 0;
   PolyMesh p = about(name, [&] { return pair_triangles(t, &left); });
-  *description = std::to_string(p.num_vertices()) + " vertices, " + std::to_string(t.num_faces()) +
-                 " triangles paired into " + std::to_string((t.num_faces() - left) / 2) + " quads, " +
-                 std::to_string(left) + " left";
+  *description = count_noun(p.num_vertices(), "vertex") + ", " + count_noun(t.num_faces(), "triangle") + " paired into " +
+                 count_noun((t.num_faces() - left) / 2, "quad") + ", " + std::to_string(left) + " left";
   return p;
 }
 
@@ -199,7 +199,7 @@ Input load_input(const std::string& in) {
     r.name = in;
     r.poly = in == "cube" ? make_quad_cube() : make_quad_torus(16, 8);
     r.triangles = triangulate(r.poly);
-    r.description = std::to_string(r.poly.num_vertices()) + " vertices, " + face_summary(r.poly);
+    r.description = count_noun(r.poly.num_vertices(), "vertex") + ", " + face_summary(r.poly);
     return r;
   }
   if (!is_mesh_file(in)) throw InvalidInput("subdiv: INPUT must be a mesh (.obj, .off, .ply) or cube | torus, not '" + in + "'");
@@ -209,16 +209,28 @@ Input load_input(const std::string& in) {
   r.triangles.normals.clear();
   r.triangles.texcoords.clear();
   r.triangles.colors.clear();
-  if (info.polygons_triangulated > 0) {
-    r.source = Input::Source::kPolygonFile;
-    r.poly = quads_from_fans(r.triangles);
-    r.description = std::to_string(r.poly.num_vertices()) + " vertices, " + face_summary(r.poly) + ", rebuilt from the " +
-                    std::to_string(r.triangles.num_faces()) + " triangles the reader made of the file's faces";
-  } else {
-    r.source = Input::Source::kTriangleFile;
-    r.poly = paired(in, r.triangles, &r.description);
+  try {
+    if (info.polygons_triangulated > 0) {
+      r.source = Input::Source::kPolygonFile;
+      r.poly = quads_from_fans(r.triangles);
+      r.description = count_noun(r.poly.num_vertices(), "vertex") + ", " + face_summary(r.poly) + ", rebuilt from the " +
+                      count_noun(r.triangles.num_faces(), "triangle") + " the reader made of the file's faces";
+    } else {
+      r.source = Input::Source::kTriangleFile;
+      r.poly = paired(in, r.triangles, &r.description);
+    }
+    about(in, [&] { r.poly.validate(); return 0; });
+  } catch (const InvalidInput&) {
+    // The library names a face of the quads rebuilt from the fans (or of the paired triangles) and vertices
+    // from 0: "edge 0-1 of face 1" was the file's third face, on OBJ vertices 1 and 2. Said again in the
+    // file's terms when the file's faces can be found (OBJ, OFF).
+    if (const std::optional<FileFaces> faces = read_file_faces(in, r.triangles)) {
+      std::size_t line = 0;
+      const std::string problem = topology_problem(*faces, &line);
+      if (!problem.empty()) throw IoError(in, problem, line);
+    }
+    throw;
   }
-  about(in, [&] { r.poly.validate(); return 0; });
   return r;
 }
 
@@ -267,7 +279,9 @@ Size primal_size(const PolyMesh& base, int steps) {
   return {v, f, c - 2 * f};
 }
 
-std::string count(std::uint64_t n) { return n == kSaturated ? std::string("more than 2^60") : std::to_string(n); }
+std::string count(std::uint64_t n, std::string_view noun) {
+  return n == kSaturated ? "more than 2^60 " + noun_for(n, noun) : count_noun(n, noun);
+}
 
 // Memory: a uniform result costs about 80 bytes per triangle at its peak; the Multi-Triangulation of
 // --adaptive keeps every level, about 300 bytes per uniform triangle, hence a limit 8 times lower.
@@ -278,8 +292,8 @@ void check_size(const Size& size, const SchemeInfo& s, int steps, std::uint64_t 
                 bool adaptive = false) {
   const std::uint64_t limit = adaptive ? max_triangles / kAdaptiveLimitDivisor : max_triangles;
   if (size.triangles > limit || size.vertices > limit)
-    throw InvalidInput("subdiv: " + std::string(s.name) + " with " + std::to_string(steps) + " steps would make " +
-                       count(size.triangles) + " triangles, more than the limit " + std::to_string(limit) +
+    throw InvalidInput("subdiv: " + std::string(s.name) + " with " + count_noun(std::uint64_t(steps), "step") +
+                       " would make " + count(size.triangles, "triangle") + ", more than the limit " + std::to_string(limit) +
                        (adaptive ? " (--max-triangles / 8 with --adaptive; lower " : " (--max-triangles; lower ") +
                        count_option + ")");
 }
@@ -558,18 +572,19 @@ int run_subdiv(const SubdivArgs& a) {
     const QueryStats st = extract(front, q);
     const double ms = watch.ms();
     out = front.to_mesh();
-    std::snprintf(line, sizeof line,
-                  "%s, %d binary steps, adaptive: %zu nodes built in %.1f ms; front %zu vertices, %zu triangles of "
-                  "%zu uniform (%zu nodes refined) in %.2f ms",
-                  s.title, steps, mt.num_nodes(), build_ms, out.num_vertices(), out.num_faces(), info.uniform_faces,
-                  st.refined, ms);
+    std::snprintf(line, sizeof line, "%s, %s, adaptive: %s built in %.1f ms; front %s, %s of %zu uniform (%s refined) in %.2f ms",
+                  s.title, count_noun(std::uint64_t(steps), "binary step").c_str(), count_noun(mt.num_nodes(), "node").c_str(),
+                  build_ms, count_noun(out.num_vertices(), "vertex").c_str(), count_noun(out.num_faces(), "triangle").c_str(),
+                  info.uniform_faces, count_noun(st.refined, "node").c_str(), ms);
   } else {
     Result r = run_uniform(base, s, steps, a.max_triangles, count_option(a), !a.png.empty());
     out = std::move(r.triangles);
     picture = std::move(r.polygons);
-    std::snprintf(line, sizeof line, "%s, %d %s: %zu vertices, %zu faces -> %zu vertices, %zu polygons, %zu triangles in %.2f ms",
-                  s.title, steps, s.dual ? "steps" : "binary steps", base.num_vertices(), base.num_faces(),
-                  out.num_vertices(), r.num_polygons, out.num_faces(), r.ms);
+    std::snprintf(line, sizeof line, "%s, %s: %s, %s -> %s, %s, %s in %.2f ms", s.title,
+                  count_noun(std::uint64_t(steps), s.dual ? "step" : "binary step").c_str(),
+                  count_noun(base.num_vertices(), "vertex").c_str(), count_noun(base.num_faces(), "face").c_str(),
+                  count_noun(out.num_vertices(), "vertex").c_str(), count_noun(r.num_polygons, "polygon").c_str(),
+                  count_noun(out.num_faces(), "triangle").c_str(), r.ms);
   }
   std::optional<Image> image;
   if (!a.png.empty()) {

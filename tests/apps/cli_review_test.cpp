@@ -359,11 +359,11 @@ TEST(CliReview, BuildSaysLeftOverFacesOnlyWhenThereAreSome) {
   }
   CmdResult r = run("build " + ico.string() + " --levels 1 --quiet -o " + (dir / "a.vrm").string(), dir);
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_TRUE(contains(r.out, "semiregular: 20 base faces paired into 10 blocks, 1 levels\n")) << r.out;
+  EXPECT_TRUE(contains(r.out, "semiregular: 20 base faces paired into 10 blocks, 1 level\n")) << r.out;
   EXPECT_FALSE(contains(r.out, "left over")) << r.out;
   r = run("build " + odd.string() + " --levels 1 --quiet -o " + (dir / "b.vrm").string(), dir);
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_TRUE(contains(r.out, "paired into 1 blocks (1 left over, split 1->2 on the border), 1 levels")) << r.out;
+  EXPECT_TRUE(contains(r.out, "paired into 1 block (1 left over, split 1->2 on the border), 1 level")) << r.out;
 }
 
 // The line of `--help` output that starts with `option` (after the indentation).
