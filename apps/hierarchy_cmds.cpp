@@ -768,7 +768,9 @@ int run_pm_build(const PmBuildArgs& a) {
               count_noun(st.base_vertices, "vertex").c_str(), count_noun(st.base_faces, "face").c_str(),
               count_noun(h.num_roots(), "tree").c_str(), h.max_depth(), double(h.memory_bytes()) / double(h.num_faces()),
               st.seconds, a.output.c_str());
-  if (st.lt_finished && st.collapses > st.lt_finish_from)
+  if (st.lt_finished && st.collapses == st.lt_finish_from + 1)
+    std::printf("collapse %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.collapses, a.lt_finish);
+  else if (st.lt_finished && st.collapses > st.lt_finish_from)
     std::printf("collapses %zu to %zu ordered and placed by Lindstrom-Turk costs (--lt-finish %g)\n", st.lt_finish_from + 1,
                 st.collapses, a.lt_finish);
   if (distance) print_distance("base mesh", *distance, "input");

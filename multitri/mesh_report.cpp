@@ -285,8 +285,10 @@ std::string format_report(const MeshReport& r) {
   add("faces", num(r.faces) + " (" + num(r.degenerate_faces) + " degenerate, " + num(r.zero_area_faces) +
                    " zero-area, " + num(r.duplicate_faces) + " duplicate)");
   add("edges", num(r.edges) + " (" + num(r.orientation_inconsistent_edges) + " where its two faces disagree on orientation)");
-  add("boundary", num(r.boundary_edges) + " edges in " + num(r.boundary_loops) + " loops");
-  add("non-manifold", num(r.non_manifold_edges) + " edges, " + num(r.non_manifold_vertices) + " vertices");
+  // "1 loop", not "1 loops": a count and its noun agree in the phrases below.
+  auto count = [&](std::size_t n, const char* one, const char* many) { return num(n) + " " + (n == 1 ? one : many); };
+  add("boundary", count(r.boundary_edges, "edge", "edges") + " in " + count(r.boundary_loops, "loop", "loops"));
+  add("non-manifold", count(r.non_manifold_edges, "edge", "edges") + ", " + count(r.non_manifold_vertices, "vertex", "vertices"));
   add("components", num(r.components));
   add("euler char", std::to_string(r.euler_characteristic));
   add("closed", r.closed ? "yes" : "no");

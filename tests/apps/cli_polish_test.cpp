@@ -109,6 +109,12 @@ TEST(CliPlurals, RealCommandsSayOneInTheSingular) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(contains(r.out, "\n1 collapse (rejected: ")) << r.out;
   EXPECT_TRUE(contains(r.out, "0 unreferenced vertices, ")) << r.out;
+  // Six vertices are within 4x the target of 5: the one collapse is the Lindstrom-Turk finish's.
+  EXPECT_TRUE(contains(r.out, "\ncollapse 1 ordered and placed by Lindstrom-Turk costs")) << r.out;
+  EXPECT_FALSE(contains(r.out, "collapses 1 to 1")) << r.out;
+  r = run("pm build " + (dir / "oct.obj").string() + " --vertices 4 --quiet -o " + (dir / "oct4.vmh").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "\ncollapses 1 to 2 ordered and placed by Lindstrom-Turk costs")) << r.out;
   r = run("info " + vmh, dir);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(contains(r.out, "6 leaves, 8 faces, 1 collapse (7 nodes)")) << r.out;

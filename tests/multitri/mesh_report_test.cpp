@@ -402,6 +402,18 @@ TEST(MeshReportFixtures, FormatMentionsTheCounts) {
   EXPECT_NE(s.find("[0, 0, 0] .. [9, 9, 9]"), std::string::npos) << s;
 }
 
+// A count of one takes the singular: one triangle has one boundary loop; three triangles on one edge make
+// one non-manifold edge.
+TEST(MeshReportFixtures, FormatAgreesCountsWithTheirNouns) {
+  const std::string one = format_report(analyze_mesh(make_mesh(ring_positions(3), {0, 1, 2})));
+  EXPECT_NE(one.find("boundary      3 edges in 1 loop\n"), std::string::npos) << one;
+  std::vector<glm::vec3> p = ring_positions(3);
+  p.push_back({0.f, 0.f, 1.f});
+  p.push_back({0.f, 0.f, -1.f});
+  const std::string fin = format_report(analyze_mesh(make_mesh(p, {0, 1, 2, 1, 0, 3, 0, 1, 4})));
+  EXPECT_NE(fin.find("non-manifold  1 edge, "), std::string::npos) << fin;
+}
+
 TEST(MeshReportFixtures, FlippedFaceMakesItsThreeEdgesInconsistent) {
   TriMesh t = tetrahedron();
   EXPECT_EQ(analyze_mesh(t).orientation_inconsistent_edges, 0u);
