@@ -4,6 +4,14 @@
 // attributes per vertex. We keep the `v` statements as the vertices (so vertex ids match the file) and
 // give each vertex the vt/vn of the first corner that uses it; later corners that disagree are counted in
 // ReadInfo::attribute_conflicts rather than silently dropped or turned into split vertices.
+//
+// A backslash at the end of a line continues the statement on the next line, as the OBJ specification
+// allows, whatever the statement (the cursor's continuations, detail/text_cursor.hpp): it reads as a blank,
+// so "f 1 2 \" + "3" and "f 1 2\" + "3" are both "f 1 2 3". A comment is not continued, and a backslash
+// with more than blanks after it on its line is an ordinary character (which no number or index accepts).
+// Errors count physical lines. One about a token (a bad number or index, one number too many) names the
+// line that token is on; one about the statement as a whole (too few numbers or corners, a colour, the
+// vertex count) names the line where the statement starts.
 #include <charconv>
 #include <cstdint>
 #include <string>
@@ -40,10 +48,11 @@ struct MaxRef {
 class ObjParser {
  public:
   ObjParser(const std::string& path, std::string_view data, ReadInfo& info)
-      : path_(path), cur_(data, path, '#'), info_(info) {}
+      : path_(path), cur_(data, path, '#', true), info_(info) {}
 
   TriMesh run() {
     while (cur_.skip_empty_lines()) {
+      cur_.begin_statement();
       last_line_ = cur_.line();
       const std::string_view key = cur_.token();
       if (key == "v") {
@@ -55,8 +64,9 @@ class ObjParser {
       } else if (key == "vn") {
         parse_vn();
       }
-      // Anything else (o, g, s, usemtl, mtllib, l, p, vp, curves...) carries no triangle geometry.
-      cur_.next_line();
+      // Anything else (o, g, s, usemtl, mtllib, l, p, vp, curves...) carries no triangle geometry: it is
+      // skipped with the lines it continues onto.
+      cur_.next_statement();
     }
     finish();
     return std::move(mesh_);
@@ -75,20 +85,20 @@ class ObjParser {
       extra[n++] = cur_.read_float("vertex colour or weight");
     }
     if (n != 0 && n != 1 && n != 3)
-      cur_.fail("v statement has " + std::to_string(3 + n) + " numbers (expected 3, 4 or 6)");
+      cur_.fail_statement("v statement has " + std::to_string(3 + n) + " numbers (expected 3, 4 or 6)");
     const bool has_color = n == 3;
     // Colours must be on every v or on none: TriMesh attributes are all-or-nothing.
-    if (has_color && uncoloured_ > 0) cur_.fail("v has a colour but earlier v statements do not");
-    if (!has_color && !mesh_.colors.empty()) cur_.fail("v has no colour but earlier v statements do");
+    if (has_color && uncoloured_ > 0) cur_.fail_statement("v has a colour but earlier v statements do not");
+    if (!has_color && !mesh_.colors.empty()) cur_.fail_statement("v has no colour but earlier v statements do");
     if (has_color) {
       for (int k = 0; k < 3; ++k)
-        if (!(extra[k] >= 0.0f && extra[k] <= 1.0f)) cur_.fail("vertex colour component is outside [0, 1]");
+        if (!(extra[k] >= 0.0f && extra[k] <= 1.0f)) cur_.fail_statement("vertex colour component is outside [0, 1]");
       mesh_.colors.emplace_back(extra[0], extra[1], extra[2]);
     } else {
       ++uncoloured_;
     }
     // A 4th number is the rational weight w, meaningful for curves only.
-    if (mesh_.positions.size() + 1 >= kInvalid) cur_.fail("too many vertices for 32-bit indices");
+    if (mesh_.positions.size() + 1 >= kInvalid) cur_.fail_statement("too many vertices for 32-bit indices");
     mesh_.positions.push_back(p);
   }
 
@@ -157,15 +167,15 @@ class ObjParser {
 
   void parse_f() {
     polygon_.clear();
-    while (!cur_.at_eol()) {
-      const std::string_view tok = cur_.token();
+    // token() is empty at the statement's end: asking at_eol() first would look at each corner twice.
+    for (std::string_view tok = cur_.token(); !tok.empty(); tok = cur_.token()) {
       Index v, vt, vn;
       parse_corner(tok, v, vt, vn);
       polygon_.push_back(v);
       if (vt != kInvalid || vn != kInvalid) attribute_corners_.push_back({v, vt, vn});
     }
     if (polygon_.size() < 3)
-      cur_.fail("face has " + std::to_string(polygon_.size()) + " corners (at least 3 needed)");
+      cur_.fail_statement("face has " + std::to_string(polygon_.size()) + " corners (at least 3 needed)");
     if (polygon_.size() > 3) ++info_.polygons_triangulated;
     for (std::size_t k = 2; k < polygon_.size(); ++k) {
       mesh_.indices.push_back(polygon_[0]);

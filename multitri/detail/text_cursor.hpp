@@ -7,6 +7,15 @@
 ///
 /// The cursor ends lines at LF only and takes CR for a blank, which reads CRLF files as they are. A lone CR
 /// (classic Mac OS) would join two lines, so the readers first pass their text through lone_cr_to_lf.
+///
+/// Line continuations (OBJ; asked for at construction): a backslash followed by nothing but blanks up to the
+/// line end or the end of the text joins the next line to the current one and counts as a blank, so it also
+/// ends a token it is glued to ("2\"). at_eol, skip_empty_lines, token, the read_ functions and
+/// next_statement follow continuations; skip_blanks, next_line and rest_of_line stay on the physical line.
+/// A comment ends at its own line end (a backslash in it continues nothing), and a backslash anywhere else
+/// is an ordinary character. line() is always the physical line of the position, so an error names the
+/// line its token is on; statement_line() is where the current statement started (begin_statement), for
+/// errors about a statement as a whole.
 #include <algorithm>
 #include <cfloat>
 #include <charconv>
@@ -138,11 +147,13 @@ inline std::string_view lone_cr_to_lf(std::string_view text, std::string& storag
 
 class TextCursor {
  public:
-  /// `comment` (0 = none) starts a comment that runs to the end of the line when it begins a token. The
-  /// cursor refers to `text` and `file`, which must outlive it (a temporary file name does not compile).
-  TextCursor(std::string_view text, const std::string& file, char comment = '\0') noexcept
-      : begin_(text.data()), p_(text.data()), end_(text.data() + text.size()), file_(file), comment_(comment) {}
-  TextCursor(std::string_view text, const std::string&& file, char comment = '\0') = delete;
+  /// `comment` (0 = none) starts a comment that runs to the end of the line when it begins a token;
+  /// `continuations` follows backslash line continuations (see the file comment). The cursor refers to
+  /// `text` and `file`, which must outlive it (a temporary file name does not compile).
+  TextCursor(std::string_view text, const std::string& file, char comment = '\0', bool continuations = false) noexcept
+      : begin_(text.data()), p_(text.data()), end_(text.data() + text.size()), file_(file), comment_(comment),
+        continuations_(continuations) {}
+  TextCursor(std::string_view text, const std::string&& file, char comment = '\0', bool continuations = false) = delete;
 
   bool at_end() const noexcept { return p_ == end_; }
   std::size_t line() const noexcept { return line_; }
@@ -152,18 +163,28 @@ class TextCursor {
 
   static bool is_blank(char c) noexcept { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
-  /// Skips blanks on the current line (not the newline).
+  /// Skips blanks on the current line (not the newline, nor a continuation).
   void skip_blanks() noexcept {
     while (p_ != end_ && is_blank(*p_)) ++p_;
   }
 
-  /// True when only blanks or a comment remain on the current line.
+  /// True when only blanks or a comment remain on the current line; with continuations, moves past those
+  /// first (so: when the statement has no token left).
   bool at_eol() noexcept {
-    skip_blanks();
-    return p_ == end_ || *p_ == '\n' || (comment_ != '\0' && *p_ == comment_);
+    for (;;) {
+      skip_blanks();
+      if (p_ == end_ || *p_ == '\n' || (comment_ != '\0' && *p_ == comment_)) return true;
+      // The common path pays one more test of the byte at hand: continuations are rare.
+      if (*p_ != '\\' || !continuations_) [[likely]] return false;
+      const char* after = continuation_end(p_);
+      if (after == nullptr) return false;  // a backslash that begins a token
+      line_ += after != end_ ? 1 : 0;
+      p_ = after;
+    }
   }
 
-  /// Moves to the start of the next line (or the end of the text).
+  /// Moves to the start of the next line (or the end of the text). Physical lines: a continuation at the
+  /// end of the current line is not followed (see next_statement).
   void next_line() noexcept {
     const void* nl = std::memchr(p_, '\n', static_cast<std::size_t>(end_ - p_));
     if (nl == nullptr) {
@@ -173,6 +194,32 @@ class TextCursor {
       ++line_;
     }
   }
+
+  /// Moves past the rest of the current statement: to the start of the first line that the current one
+  /// does not continue onto. Without continuations, next_line().
+  void next_statement() noexcept {
+    if (p_ != end_ && *p_ == '\n') {  // where a statement that was read to its end stops
+      ++p_;
+      ++line_;
+      return;
+    }
+    if (continuations_) {
+      // Most lines do not end in a backslash, as their last non-blank byte tells. One that does is
+      // followed token by token, since a comment before that backslash makes it no continuation.
+      const void* nl = std::memchr(p_, '\n', static_cast<std::size_t>(end_ - p_));
+      const char* stop = nl ? static_cast<const char*>(nl) : end_;
+      while (stop != p_ && is_blank(stop[-1])) --stop;
+      if (stop != p_ && stop[-1] == '\\')
+        while (!at_eol()) token();
+    }
+    next_line();
+  }
+
+  /// Marks the current line as the start of a statement, for statement_line() and the errors about a
+  /// missing token.
+  void begin_statement() noexcept { statement_line_ = line_; }
+  /// The line given to begin_statement(); line() when it was never called.
+  std::size_t statement_line() const noexcept { return statement_line_ != 0 ? statement_line_ : line_; }
 
   /// Skips blank and comment-only lines; false when the text ends first.
   bool skip_empty_lines() noexcept {
@@ -188,6 +235,10 @@ class TextCursor {
     if (at_eol()) return {};
     const char* start = p_;
     while (p_ != end_ && !is_blank(*p_) && *p_ != '\n') ++p_;
+    // A continuation glued to the token is not part of it: leave it for at_eol. (A token that is a lone
+    // backslash is not a continuation, or at_eol would have taken it.)
+    if (p_[-1] == '\\' && continuations_ && p_ - start > 1 && continuation_end(p_ - 1) != nullptr) [[unlikely]]
+      --p_;
     return {start, static_cast<std::size_t>(p_ - start)};
   }
 
@@ -209,10 +260,13 @@ class TextCursor {
   }
 
   [[noreturn]] void fail(const std::string& reason) const { throw IoError(file_, reason, line_); }
+  /// Throws naming statement_line(): for an error about a statement as a whole.
+  [[noreturn]] void fail_statement(const std::string& reason) const { throw IoError(file_, reason, statement_line()); }
 
-  /// Throws for a token that did not parse: names the token and what was expected.
+  /// Throws for a token that did not parse: names the token and what was expected. A missing token is the
+  /// statement's fault, named at statement_line().
   [[noreturn]] void fail_number(NumberStatus status, std::string_view tok, const char* what) const {
-    if (tok.empty()) fail(std::string("missing ") + what + (p_ == end_ ? " (file truncated?)" : ""));
+    if (tok.empty()) fail_statement(std::string("missing ") + what + (p_ == end_ ? " (file truncated?)" : ""));
     switch (status) {
       case NumberStatus::kNotFinite: fail(std::string(what) + " is not finite: " + quote(tok));
       case NumberStatus::kOutOfRange: fail(std::string(what) + " is out of range: " + quote(tok));
@@ -248,12 +302,23 @@ class TextCursor {
   }
 
  private:
+  // For a backslash at `backslash`: the position after the line end it continues over (end_ at the end of
+  // the text), or nullptr when something other than blanks follows it on its line.
+  const char* continuation_end(const char* backslash) const noexcept {
+    const char* q = backslash + 1;
+    while (q != end_ && is_blank(*q)) ++q;
+    if (q == end_) return q;
+    return *q == '\n' ? q + 1 : nullptr;
+  }
+
   const char* begin_;
   const char* p_;
   const char* end_;
   const std::string& file_;
   char comment_;
+  bool continuations_;
   std::size_t line_ = 1;
+  std::size_t statement_line_ = 0;  // 0: no statement begun
 };
 
 }  // namespace varmesh::detail

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <ostream>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -681,6 +682,157 @@ TEST(MeshIoObj, MixedLineEndsAreEachOneLineEnd) {
   // A CR before a CRLF (left by a second text-mode conversion) is a line end of its own: an empty line.
   const IoError e = read_failure(dir, "crcrlf.obj", "v 0 0 0\r\r\nv 1 0 0\r\r\nv 0 1 0\r\r\nf 1 2 x\r\r\n");
   EXPECT_EQ(e.line(), 7u) << e.what();
+}
+
+// A backslash at the end of a line (blanks and a CR may follow it) continues the statement on the next
+// line, and stands for a blank there. Any statement may be continued, the keyword too; the statements the
+// reader skips (g, o, usemtl, l) are skipped with the lines they continue onto. A comment ends at its own
+// line end: a backslash in a comment continues nothing.
+TEST(MeshIoObj, BackslashContinuesAStatement) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_continuation");
+  const std::string plain =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.5 0.25\nvn 0 0 1\ng a b\nusemtl m x\nl 1 2\no obj name\n"
+      "f 1/1/1 2/1/1 3/1/1\nf 2 4 3\n";
+  write_text(dir / "plain.obj", plain);
+  const TriMesh expected = read_mesh((dir / "plain.obj").string());
+  ASSERT_EQ(expected.num_vertices(), 4u);
+  ASSERT_EQ(expected.num_faces(), 2u);
+  const std::string continued =
+      "v 0 0 \\\n0\nv 1 \\\n 0 0\nv\\\n0 1 0\n# a comment ends here \\\nv 1 1 0\nvt 0.5\\\n 0.25\nvn 0 0 \\\n1\n"
+      "g a \\\nb\nusemtl m \\\n x\nl 1 \\\n2\no obj \\\nname\nf 1/1/1 2/1/1 \\\n3/1/1\nf \\\n2 \\\n4\\\n3\n";
+  write_text(dir / "continued.obj", continued);
+  expect_identical(expected, read_mesh((dir / "continued.obj").string()));
+  // CRLF line ends, blanks between the backslash and the line end, a lone CR (classic Mac OS).
+  std::string crlf;
+  for (char c : continued) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  write_text(dir / "crlf.obj", crlf);
+  expect_identical(expected, read_mesh((dir / "crlf.obj").string()));
+  std::string blanks;
+  for (char c : continued) blanks += c == '\\' ? std::string("\\ \t\r") : std::string(1, c);
+  write_text(dir / "blanks.obj", blanks);
+  expect_identical(expected, read_mesh((dir / "blanks.obj").string()));
+  write_text(dir / "cr.obj", lone_cr_line_ends(continued));
+  expect_identical(expected, read_mesh((dir / "cr.obj").string()));
+  // What a skipped statement continues onto is skipped with it: this v is part of the group's name.
+  write_text(dir / "group.obj", plain + "g name \\\nv 9 9 9\n");
+  EXPECT_EQ(read_mesh((dir / "group.obj").string()).num_vertices(), 4u);
+  // A continued line that ends the statement: the next line is a statement of its own.
+  write_text(dir / "empty_next.obj", plain + "f 1 2 3 \\\n\nf 3 2 4\n");
+  EXPECT_EQ(read_mesh((dir / "empty_next.obj").string()).num_faces(), 4u);
+}
+
+// A backslash as the file's last byte (or followed by blanks only) continues onto nothing: the statement
+// ends there.
+TEST(MeshIoObj, BackslashAtTheEndOfTheFile) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_continuation_eof");
+  const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  write_text(dir / "plain.obj", v + "f 1 2 3\n");
+  const TriMesh expected = read_mesh((dir / "plain.obj").string());
+  for (const char* end : {"f 1 2 3 \\", "f 1 2 3\\", "f 1 2 3 \\ \r", "f 1 2 \\\n3 \\"}) {
+    SCOPED_TRACE(end);
+    write_text(dir / "eof.obj", v + end);
+    expect_identical(expected, read_mesh((dir / "eof.obj").string()));
+  }
+  const IoError e = read_failure(dir, "short.obj", v + "f 1 2 \\");
+  EXPECT_EQ(e.line(), 4u) << e.what();
+  EXPECT_NE(std::string(e.what()).find("face has 2 corners"), std::string::npos) << e.what();
+}
+
+// A backslash that is not the last thing on its line is an ordinary character, which no number or index
+// accepts: an error, as before continuations were read.
+TEST(MeshIoObj, BackslashInsideALineIsAnError) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_backslash_inside");
+  const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  struct Case {
+    std::string text;
+    const char* reason;
+  };
+  const Case cases[] = {
+      {v + "f 1 \\ 2 3\n", "bad vertex index in face corner '\\'"},
+      {v + "f 1 2\\3\n", "bad face corner '2\\3'"},
+      {v + "f 1 2 3 \\ # a comment after the backslash\n", "bad vertex index in face corner '\\'"},
+      {v + "f 1 2 3 \\x\n", "bad vertex index in face corner '\\x'"},
+      {"v 0 0\\0\n" + v + "f 1 2 3\n", "bad number '0\\0' for vertex y"},
+      {"v 0 0 \\\\\n0\n" + v + "f 1 2 3\n", "bad number '\\' for vertex z"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.text);
+    const IoError e = read_failure(dir, "bad.obj", c.text);
+    EXPECT_EQ(e.line(), line_of(c.text, "\\")) << e.what();
+    EXPECT_NE(std::string(e.what()).find(c.reason), std::string::npos) << e.what();
+  }
+}
+
+// Line numbers after continued lines count every physical line. An error about one token names the line
+// that token is on; an error about the statement as a whole (too few numbers or corners, a colour that
+// does not match the other vertices) names the line where the statement starts.
+TEST(MeshIoObj, ErrorLinesAfterContinuedLines) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_continuation_lines");
+  const std::string head = "v 0 0 \\\n0\nv 1 \\\n0 \\\n0\n# three\nv 0 1 0\nf 1 \\\n2 \\\n3\n";
+  struct Case {
+    std::string tail;
+    std::string at;  // the line named is the first line holding this text
+    const char* reason;
+  };
+  const Case cases[] = {
+      {"f 1 2 x\n", "f 1 2 x", "bad vertex index in face corner 'x'"},
+      {"f 1 \\\n2 \\\nx\n", "x\n", "bad vertex index in face corner 'x'"},
+      {"v 0 \\\n1.5y 0\n", "1.5y", "bad number '1.5y' for vertex y"},
+      {"vn 0 0 \\\n1 \\\n2\n", "2\n", "vn statement has more than 3 numbers"},
+      {"f 1 \\\n2 \\\n-7\n", "-7", "relative vertex index -7 is out of range"},
+      {"f 1 \\\n2 \\\n9\n", "9\n", "face refers to vertex 9 but the file has 3 v statements"},
+      {"f 1 \\\n2\n", "f 1 \\\n2\n", "face has 2 corners"},
+      {"v 0 \\\n1\n", "v 0 \\\n1\n", "missing vertex z"},
+      {"v 0 1 \\\n0 1 \\\n0\n", "v 0 1 \\\n0 1", "v statement has 5 numbers"},
+      {"v 2 2 \\\n0 0.5 \\\n0.5 0.5\n", "v 2 2", "v has a colour but earlier v statements do not"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.tail);
+    const std::string text = head + c.tail;
+    const IoError e = read_failure(dir, "bad.obj", text);
+    EXPECT_EQ(e.line(), line_of(text, c.at)) << e.what();
+    EXPECT_NE(std::string(e.what()).find(c.reason), std::string::npos) << e.what();
+  }
+}
+
+// Continuations put at random token boundaries (the backslash after a blank or right after the token,
+// blanks after it, LF or CRLF) change neither the mesh nor the line that a later error names.
+TEST(MeshIoObj, RandomContinuationsChangeNothing) {
+  const fs::path dir = testing::scratch_dir("mesh_io_obj_continuation_random");
+  const std::string plain =
+      "# random\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 1 1 0 0.5 0.5 0.5\nvt 0.5 0.25\nvt 0.25 0.5\n"
+      "vn 0 0 1\ns off\ng part\nf 1/1/1 2/2/1 3/1/1\nusemtl red\nf -3 4 -2 # last\n";
+  write_text(dir / "plain.obj", plain);
+  const TriMesh expected = read_mesh((dir / "plain.obj").string());
+  std::mt19937 rng(5);
+  auto continue_randomly = [&](const std::string& source) {
+    std::string out;
+    bool in_comment = false;
+    for (std::size_t i = 0; i < source.size(); ++i) {
+      const char c = source[i];
+      out += c;
+      in_comment = c == '#' || (in_comment && c != '\n');
+      const bool token_end = c != ' ' && c != '\n' && i + 1 < source.size() && source[i + 1] == ' ';
+      if (!token_end || in_comment || rng() % 3 != 0) continue;
+      out += rng() % 2 == 0 ? " \\" : "\\";
+      for (auto b = rng() % 3; b > 0; --b) out += rng() % 2 == 0 ? ' ' : '\t';
+      out += rng() % 2 == 0 ? "\r\n" : "\n";
+    }
+    return out;
+  };
+  std::size_t continued = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    SCOPED_TRACE(trial);
+    const std::string good = continue_randomly(plain);
+    continued += good.size() > plain.size() ? 1 : 0;
+    write_text(dir / "good.obj", good);
+    expect_identical(expected, read_mesh((dir / "good.obj").string()));
+    const std::string bad = good + continue_randomly("f 1 2 3\nf 1 2 3 4 x 2\n");
+    const IoError e = read_failure(dir, "bad.obj", bad);
+    EXPECT_EQ(e.line(), line_of(bad, "x")) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad vertex index in face corner 'x'"), std::string::npos) << e.what();
+  }
+  EXPECT_GT(continued, 90u);
 }
 
 // OFF with lone CRs (classic Mac OS) or mixed line ends reads as with LF, header included, and errors name

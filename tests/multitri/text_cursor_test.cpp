@@ -208,5 +208,63 @@ TEST(TextCursorLoneCr, RandomTextsMatchTheOracle) {
     }
 }
 
+
+// The tokens of each statement and the line of each token, read the way the OBJ reader reads them.
+struct Read {
+  std::vector<std::vector<std::string>> statements;
+  std::vector<std::size_t> token_lines;
+  std::vector<std::size_t> statement_lines;
+};
+
+Read read_statements(std::string_view text, bool continuations) {
+  const std::string file = "t";
+  TextCursor cur(text, file, '#', continuations);
+  Read out;
+  while (cur.skip_empty_lines()) {
+    cur.begin_statement();
+    out.statement_lines.push_back(cur.statement_line());
+    out.statements.emplace_back();
+    for (std::string_view tok = cur.token(); !tok.empty(); tok = cur.token()) {
+      out.statements.back().emplace_back(tok);
+      out.token_lines.push_back(cur.line());
+    }
+    cur.next_statement();
+  }
+  return out;
+}
+
+using Statements = std::vector<std::vector<std::string>>;
+
+// A backslash with only blanks after it on its line is a blank that joins the next line, glued to a token
+// or not, at the end of the text too; a comment is not continued; a backslash elsewhere is an ordinary
+// character. Lines stay physical lines.
+TEST(TextCursorContinuations, JoinLinesAndCountThem) {
+  const std::string text = "a b \\\nc\\ \t\r\nd\n# x \\\ne \\ f \\\\\n\n\\\ng \\\n# y\nh \\";
+  const Read r = read_statements(text, true);
+  EXPECT_EQ(r.statements, (Statements{{"a", "b", "c", "d"}, {"e", "\\", "f", "\\"}, {"g"}, {"h"}}));
+  EXPECT_EQ(r.statement_lines, (std::vector<std::size_t>{1, 5, 8, 10}));
+  EXPECT_EQ(r.token_lines, (std::vector<std::size_t>{1, 1, 2, 3, 5, 5, 5, 5, 8, 10}));
+  // Without continuations (OFF, PLY), a backslash is an ordinary character everywhere.
+  const Read plain = read_statements(text, false);
+  EXPECT_EQ(plain.statements.front(), (std::vector<std::string>{"a", "b", "\\"}));
+  EXPECT_EQ(plain.statements.size(), 7u);
+}
+
+// next_statement() skips a statement that was not read, with the lines it continues onto, and stops at a
+// comment before a backslash.
+TEST(TextCursorContinuations, NextStatementSkipsContinuedLines) {
+  const std::string file = "t";
+  const std::string text = "g a \\\n  b \\\nc\nd # e \\\nf\n";
+  TextCursor cur(text, file, '#', true);
+  ASSERT_TRUE(cur.skip_empty_lines());
+  EXPECT_EQ(cur.token(), "g");
+  cur.next_statement();
+  EXPECT_EQ(cur.line(), 4u);
+  EXPECT_EQ(cur.token(), "d");
+  cur.next_statement();
+  EXPECT_EQ(cur.line(), 5u);
+  EXPECT_EQ(cur.token(), "f");
+}
+
 }  // namespace
 }  // namespace varmesh::detail
