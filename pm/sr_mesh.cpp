@@ -269,7 +269,7 @@ Index SrMesh::active_ancestor(Index leaf) const noexcept {
   return a;
 }
 
-void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
+void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr, Why why) {
   // ring_ holds the 1-ring of vs, pl/pr the places of vl/vr among its neighbours (-1 when absent).
   ecn_.vs = kInvalid;
   const Split& r = split_of(vs);
@@ -350,10 +350,15 @@ void SrMesh::do_vsplit(Index vs, Index vl, Index vr, int pl, int pr) {
   activate(r.vu);
   ++num_active_;
   ++stats_.vsplits;
+  stats_.forced_vsplits += why == Why::kForced ? 1 : 0;
+  if (why == Why::kPresplit) {
+    ++stats_.presplits;
+    ++stats_.degenerate_cases;
+  }
   report(vs);
 }
 
-void SrMesh::do_ecol(Index vs) {
+void SrMesh::do_ecol(Index vs, Why why) {
   // ring_ and ring2_ hold the 1-rings of vt and vu (left there by extra_common_neighbors_kept).
   ecn_.vs = kInvalid;
   const Split& r = split_of(vs);
@@ -402,6 +407,7 @@ void SrMesh::do_ecol(Index vs) {
   }
   --num_active_;
   ++stats_.ecols;
+  stats_.forced_ecols += why == Why::kForced ? 1 : 0;
 }
 
 bool SrMesh::extra_common_neighbors(Index vs, Ring& rt, Ring& ru) const {
@@ -483,7 +489,7 @@ bool SrMesh::can_ecol(Index vs) const {
 
 bool SrMesh::is_coarsenable(Index e) { return ecol_rule_allows(e) && !extra_common_neighbors_kept(e); }
 
-bool SrMesh::vsplit_kim_lee(Index vs) {
+bool SrMesh::vsplit_kim_lee(Index vs, Why why) {
   const Split& r = split_of(vs);
   const int bits = h_->node_bits();
   const std::uint64_t mask = bits >= 64 ? ~0ull : (1ull << bits) - 1ull;
@@ -555,12 +561,10 @@ bool SrMesh::vsplit_kim_lee(Index vs) {
       // Section 4.4: both cut vertices are one active vertex; split it first. A leaf cannot be split: the
       // records would be inconsistent (the reader rejects such files; this guards the arrays).
       if (h_->is_leaf(vl)) throw std::logic_error("SrMesh: both cut vertices of node " + std::to_string(vs) + " are leaf " + std::to_string(vl));
-      ++stats_.degenerate_cases;
-      ++stats_.presplits;
-      vsplit_kim_lee(vl);
+      vsplit_kim_lee(vl, Why::kPresplit);
       continue;
     }
-    do_vsplit(vs, vl, vr, pl, pr);
+    do_vsplit(vs, vl, vr, pl, pr, why);
     return true;
   }
 }
@@ -589,9 +593,7 @@ bool SrMesh::vsplit_hoppe(Index target) {
     stack.pop_back();
     // Legal: the same physical split (a coincident cut vertex is split first, as in Kim-Lee, and counted as
     // a presplit only, as under the other rules).
-    const std::size_t before = stats_.vsplits - stats_.presplits;
-    vsplit_kim_lee(v);
-    if (v != target) stats_.forced_vsplits += stats_.vsplits - stats_.presplits - before;
+    vsplit_kim_lee(v, v != target ? Why::kForced : Why::kRequested);
   }
   return node_refined(target);
 }
@@ -601,12 +603,8 @@ bool SrMesh::make_active_xv(Index n, int depth) {
     Index a = h_->parent(n);
     while (node_below(a)) a = h_->parent(a);
     if (!vsplit_xv(a, depth + 1)) return false;
-    ++stats_.forced_vsplits;
   }
-  if (node_refined(n)) {
-    if (!ecol_xv(n, depth + 1)) return false;
-    ++stats_.forced_ecols;
-  }
+  if (node_refined(n) && !ecol_xv(n, depth + 1)) return false;
   return node_active(n);
 }
 
@@ -631,7 +629,8 @@ bool SrMesh::vsplit_xv(Index vs, int depth) {
       break;
     }
   ok = ok && node_active(vs) && xv_ring_matches(vs);
-  if (ok) vsplit_kim_lee(vs);
+  // Depth 0 is vsplit()'s request; deeper ones are make_active_xv's forced splits.
+  if (ok) vsplit_kim_lee(vs, depth > 0 ? Why::kForced : Why::kRequested);
   return ok;
 }
 
@@ -641,10 +640,7 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
   const CollapseRecord& r = h_->record(vs);
   bool ok = true;
   for (Index c : {r.vt, r.vu})
-    if (ok && node_refined(c)) {
-      ok = ecol_xv(c, depth + 1);
-      if (ok) ++stats_.forced_ecols;
-    }
+    if (ok && node_refined(c)) ok = ecol_xv(c, depth + 1);
   if (ok)
     for (Index n : h_->stored_ring(vs))
       if (!make_active_xv(n, depth)) {
@@ -652,7 +648,7 @@ bool SrMesh::ecol_xv(Index vs, int depth) {
         break;
       }
   ok = ok && collapsible(vs) && xv_ring_matches(vs) && !extra_common_neighbors_kept(vs);
-  if (ok) do_ecol(vs);
+  if (ok) do_ecol(vs, depth > 0 ? Why::kForced : Why::kRequested);
   return ok;
 }
 
@@ -660,7 +656,7 @@ bool SrMesh::vsplit(Index vs) {
   check_node(vs, "vsplit");
   if (!node_active(vs)) throw InvalidInput("vsplit: node " + std::to_string(vs) + " is not active");
   switch (scheme_) {
-    case RefinementScheme::kKimLee: return vsplit_kim_lee(vs);
+    case RefinementScheme::kKimLee: return vsplit_kim_lee(vs, Why::kRequested);
     case RefinementScheme::kHoppe97: return vsplit_hoppe(vs);
     case RefinementScheme::kXiaVarshney: {
       const bool ok = vsplit_xv(vs, 0);
@@ -683,14 +679,14 @@ bool SrMesh::ecol(Index vs) {
         ++stats_.refused_ecols;
         return false;
       }
-      do_ecol(vs);
+      do_ecol(vs, Why::kRequested);
       return true;
     case RefinementScheme::kHoppe97:
       if (!hoppe_ecol_legal(vs) || extra_common_neighbors_kept(vs)) {
         ++stats_.refused_ecols;
         return false;
       }
-      do_ecol(vs);
+      do_ecol(vs, Why::kRequested);
       return true;
     case RefinementScheme::kXiaVarshney: {
       const bool ok = ecol_xv(vs, 0);

@@ -211,9 +211,10 @@ class SrMesh {
   std::uint64_t tie_key(Index e) const noexcept { return static_cast<std::uint64_t>(h_->num_nodes() - e); }
   /// Back to the base mesh (statistics kept). O(nodes + faces).
   void reset();
-  /// Forces e split (its ancestors first), telling sink(v) of each split once it is done. An exception from
-  /// the sink propagates and leaves a valid mesh with that split done. Throws InvalidInput when e is out of
-  /// range or a leaf.
+  /// Forces e split (its ancestors first), telling sink(v) of each split once it is done and counted in
+  /// stats(). An exception from the sink propagates and leaves a valid mesh with that split done: stats()
+  /// then counts exactly the operations done, that split included, and the rest of the request is not
+  /// done. Throws InvalidInput when e is out of range or a leaf.
   template <class Sink> void refine(Index e, Sink&& sink) {
     check_node(e, "refine");
     sink_ = [](void* ctx, Index v) { (*static_cast<std::remove_reference_t<Sink>*>(ctx))(v); };
@@ -384,10 +385,14 @@ class SrMesh {
   void prefetch_fan(Index h, int steps) const noexcept;
   void prefetch_vsplit(Index vs, int stage) const noexcept;
   void prefetch_ecol(Index vs, int stage) const noexcept;
-  void do_vsplit(Index vs, Index vl, Index vr, int pl, int pr);  // on ring_, cut vertices and their places given
-  void do_ecol(Index vs);  // uses ring_/ring2_ left by extra_common_neighbors_kept(vs)
+  // Why an operation is done, for SrStats. do_vsplit and do_ecol count it with the change itself, before
+  // refine()'s sink hears of it: a sink that throws then leaves the counters equal to what was done (a
+  // caller counting after the return missed a forced split whose sink threw).
+  enum class Why : std::uint8_t { kRequested, kForced, kPresplit };
+  void do_vsplit(Index vs, Index vl, Index vr, int pl, int pr, Why why);  // on ring_, cut vertices and their places given
+  void do_ecol(Index vs, Why why);  // uses ring_/ring2_ left by extra_common_neighbors_kept(vs)
   Index active_ancestor(Index leaf) const noexcept;
-  bool vsplit_kim_lee(Index vs);
+  bool vsplit_kim_lee(Index vs, Why why);
   bool vsplit_hoppe(Index vs);
   bool vsplit_xv(Index vs, int depth);
   bool ecol_xv(Index vs, int depth);
