@@ -20,7 +20,10 @@
 ///   other statements (o, g, s, usemtl, mtllib, l, p, ...) and '#' comments are ignored. Vertices are the
 ///   `v` statements, in file order, referenced or not; when corners give one vertex different vt/vn, the
 ///   first one wins and ReadInfo::attribute_conflicts counts the others. Vertices no corner gives a vt/vn
-///   get (0, 0) / (0, 0, 0) when the mesh has texcoords / normals at all.
+///   get (0, 0) / (0, 0, 0) when the mesh has texcoords / normals at all. A backslash with only blanks
+///   after it on its line continues the statement on the next line (a comment is not continued; a backslash
+///   anywhere else is an error); an error names the physical line of the bad token, or the statement's first
+///   line when the whole statement is at fault (too few numbers or corners).
 /// - OFF: headers OFF, COFF, NOFF, CNOFF (and STOFF variants with s t last), comments with '#'. Vertex
 ///   colours are 3 or 4 numbers, integers 0..255 or floats 0..1 (a '.' or exponent marks floats); face
 ///   colours are ignored.
