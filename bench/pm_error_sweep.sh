@@ -19,7 +19,7 @@ for m in decimated-knight_502v.off cow_cgal_2904v.off mech-holes-shark_5246v.off
     E=$(awk -v k="$k" -v d="$diag" 'BEGIN { printf "%.9g", k * d }')
     out=$("$V" pm query "$W/h.vmh" --error "$E" -o "$W/q.obj" --measure)
     max=$(echo "$out" | grep -o "max [0-9.e+-]*" | head -1 | cut -d' ' -f2)
-    counts="$counts $(echo "$out" | grep -o "[0-9]* triangles" | head -1 | cut -d' ' -f1)"
+    counts="$counts $(echo "$out" | grep -oE "[0-9]+ triangles?" | head -1 | cut -d' ' -f1)"
     ratio=$(awk -v m="$max" -v e="$E" 'BEGIN { printf "%.2f", m / e }')
     if awk -v r="$ratio" -v w="$worst" 'BEGIN { exit !(r > w) }'; then worst=$ratio; at=$k; fi
   done
