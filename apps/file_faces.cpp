@@ -2,100 +2,15 @@
 #include "apps/file_faces.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cstdint>
-#include <fstream>
-#include <iterator>
-#include <string_view>
 #include <unordered_map>
 
 #include "apps/cli_util.hpp"
+#include "multitri/errors.hpp"
 
 namespace varmesh::app {
 
 namespace {
-
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
-
-// The lines of a text that hold words, one at a time (the words of the current line only, so that a large
-// file costs no more than its text). LF, CRLF and a lone CR each end a line, as the readers count them; '#'
-// starts a comment that runs to the end of the line.
-class WordLines {
- public:
-  explicit WordLines(std::string_view text) : text_(text) {
-    if (text_.substr(0, 3) == "\xEF\xBB\xBF") text_.remove_prefix(3);  // the readers skip a UTF-8 byte-order mark
-  }
-  /// Moves to the next line with words; false at the end of the text.
-  bool next() {
-    words_.clear();
-    while (words_.empty() && pos_ <= text_.size()) {
-      std::size_t end = pos_;
-      while (end < text_.size() && text_[end] != '\n' && text_[end] != '\r') ++end;
-      std::string_view s = text_.substr(pos_, end - pos_);
-      // A CR ends the line on its own, or with the LF after it.
-      pos_ = end + (end + 1 < text_.size() && text_[end] == '\r' && text_[end + 1] == '\n' ? 2 : 1);
-      number_ = next_number_++;
-      s = s.substr(0, s.find('#'));
-      for (std::size_t p = 0; p < s.size();) {
-        while (p < s.size() && is_blank(s[p])) ++p;
-        std::size_t q = p;
-        while (q < s.size() && !is_blank(s[q])) ++q;
-        if (q > p) words_.push_back(s.substr(p, q - p));
-        p = q;
-      }
-    }
-    return !words_.empty();
-  }
-  std::size_t number() const { return number_; }  ///< 1-based
-  const std::vector<std::string_view>& words() const { return words_; }
-
- private:
-  std::string_view text_;
-  std::size_t pos_ = 0, number_ = 0, next_number_ = 1;
-  std::vector<std::string_view> words_;
-};
-
-// A face's corner count and line, as the scan finds them.
-struct FaceLine {
-  std::size_t corners, line;
-};
-
-// OBJ: the v and f statements.
-void scan_obj(WordLines& lines, std::vector<FaceLine>& faces, std::vector<std::size_t>& vertex_lines) {
-  while (lines.next()) {
-    if (lines.words()[0] == "v") vertex_lines.push_back(lines.number());
-    else if (lines.words()[0] == "f") faces.push_back({lines.words().size() - 1, lines.number()});
-  }
-}
-
-// OFF: the header word, the vertex and face counts (on any lines after it; the face count's line ends the
-// header), then one line per vertex and one per face, "n i0 ... i(n-1) [colour]". False when the text does not
-// follow that shape.
-bool scan_off(WordLines& lines, std::vector<FaceLine>& faces, std::vector<std::size_t>& vertex_lines) {
-  if (!lines.next()) return false;
-  std::size_t word = 1;  // after the header word
-  std::uint64_t counts[2] = {0, 0};
-  for (std::uint64_t& count : counts) {
-    while (word == lines.words().size()) {
-      if (!lines.next()) return false;
-      word = 0;
-    }
-    const std::string_view w = lines.words()[word++];
-    if (std::from_chars(w.data(), w.data() + w.size(), count).ptr != w.data() + w.size()) return false;
-  }
-  for (std::uint64_t v = 0; v < counts[0]; ++v) {
-    if (!lines.next()) return false;
-    vertex_lines.push_back(lines.number());
-  }
-  for (std::uint64_t f = 0; f < counts[1]; ++f) {
-    if (!lines.next()) return false;
-    const std::string_view w = lines.words()[0];
-    std::size_t k = 0;
-    if (std::from_chars(w.data(), w.data() + w.size(), k).ptr != w.data() + w.size()) return false;
-    faces.push_back({k, lines.number()});
-  }
-  return true;
-}
 
 // "face 3 (line 12)", "faces 1 and 3 (lines 10 and 12)", "faces 1, 3 and 4 (lines 10, 12 and 13)".
 std::string name_faces(const FileFaces& ff, const std::vector<std::size_t>& faces) {
@@ -105,52 +20,59 @@ std::string name_faces(const FileFaces& ff, const std::vector<std::size_t>& face
     numbers += sep + std::to_string(faces[i] + 1);
     lines += sep + std::to_string(ff.lines[faces[i]]);
   }
-  return noun_for(faces.size(), "face") + " " + numbers + " (" + noun_for(faces.size(), "line") + " " + lines + ")";
+  const std::string named = noun_for(faces.size(), "face") + " " + numbers;
+  // A binary PLY has no lines to name (they are all 0).
+  if (ff.lines[faces[0]] == 0) return named;
+  return named + " (" + noun_for(faces.size(), "line") + " " + lines + ")";
 }
 
 std::uint64_t edge_key(Index a, Index b) { return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b); }
 
 }  // namespace
 
-std::optional<FileFaces> file_faces(const std::string& path, std::string_view data, const TriMesh& mesh) {
-  const std::string ext = lower_extension(path);
-  if (ext != ".obj" && ext != ".off") return std::nullopt;
-  WordLines lines(data);
-  std::vector<FaceLine> faces;
-  FileFaces ff;
-  if (ext == ".obj") {
-    scan_obj(lines, faces, ff.vertex_lines);
-    ff.first_vertex = 1;
-  } else if (!scan_off(lines, faces, ff.vertex_lines)) {
+std::optional<FileFaces> file_faces(const TriMesh& mesh, const ReadInfo& info) {
+  const std::size_t nf = info.face_corners.size();
+  if (info.triangle_face.size() != mesh.num_faces() || info.face_lines.size() != nf ||
+      info.vertex_lines.size() != mesh.num_vertices())
     return std::nullopt;
-  }
-  if (ff.vertex_lines.size() != mesh.num_vertices()) return std::nullopt;
+  FileFaces ff;
+  ff.first_vertex = info.first_vertex_number;
+  ff.vertex_lines = info.vertex_lines;
+  ff.lines = info.face_lines;
+  ff.offsets.reserve(nf + 1);
+  ff.corners.reserve(mesh.num_faces() + 2 * nf);
   // Face f of k corners (c0, ..., c(k-1)) was read as the k - 2 triangles (c0, c(i-1), c(i)), i = 2..k, in
-  // file order: the corners come back from the fans, and any triangle that does not continue its fan means
-  // the scan has lost its way.
+  // file order: the corners come back from the fans. A strip (0 corners) is no polygon, and a triangle that
+  // does not continue its fan means `info` belongs to another mesh.
   std::size_t t = 0;
-  for (const FaceLine& f : faces) {
-    if (f.corners < 3 || t + (f.corners - 2) > mesh.num_faces()) return std::nullopt;
+  for (std::size_t f = 0; f < nf; ++f) {
+    const std::size_t k = info.face_corners[f];
+    if (k < 3 || t + (k - 2) > mesh.num_faces() || info.triangle_face[t] != f ||
+        info.triangle_face[t + (k - 3)] != f)
+      return std::nullopt;
     const Index c0 = mesh.corner(t, 0);
     ff.corners.insert(ff.corners.end(), {c0, mesh.corner(t, 1), mesh.corner(t, 2)});
-    for (std::size_t i = 1; i + 2 < f.corners; ++i) {
+    for (std::size_t i = 1; i + 2 < k; ++i) {
       if (mesh.corner(t + i, 0) != c0 || mesh.corner(t + i, 1) != ff.corners.back()) return std::nullopt;
       ff.corners.push_back(mesh.corner(t + i, 2));
     }
-    t += f.corners - 2;
+    t += k - 2;
     ff.offsets.push_back(ff.corners.size());
-    ff.lines.push_back(f.line);
   }
   if (t != mesh.num_faces()) return std::nullopt;
   return ff;
 }
 
-std::optional<FileFaces> read_file_faces(const std::string& path, const TriMesh& mesh) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::nullopt;
-  const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return std::nullopt;
-  return file_faces(path, data, mesh);
+std::optional<FileFaces> read_file_faces(const std::string& path) {
+  ReadInfo info;
+  info.want_sources = true;
+  TriMesh mesh;
+  try {
+    mesh = read_mesh(path, &info);
+  } catch (const IoError&) {
+    return std::nullopt;  // gone or changed since the first read: the caller keeps the library's words
+  }
+  return file_faces(mesh, info);
 }
 
 std::string topology_problem(const FileFaces& ff, std::size_t* line) {

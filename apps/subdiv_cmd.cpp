@@ -223,8 +223,9 @@ Input load_input(const std::string& in) {
   } catch (const InvalidInput&) {
     // The library names a face of the quads rebuilt from the fans (or of the paired triangles) and vertices
     // from 0: "edge 0-1 of face 1" was the file's third face, on OBJ vertices 1 and 2. Said again in the
-    // file's terms when the file's faces can be found (OBJ, OFF).
-    if (const std::optional<FileFaces> faces = read_file_faces(in, r.triangles)) {
+    // file's terms, from the provenance of a second read that asks for it (a polygon file; PLY triangle
+    // strips are none). The first read did not ask: most inputs are fine and need none of it.
+    if (const std::optional<FileFaces> faces = read_file_faces(in)) {
       std::size_t line = 0;
       const std::string problem = topology_problem(*faces, &line);
       if (!problem.empty()) throw IoError(in, problem, line);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "multitri/detail/mesh_io_formats.hpp"
 #include "multitri/detail/text_cursor.hpp"
@@ -68,6 +69,7 @@ TriMesh read_mesh_data(const std::string& path, std::string_view data, ReadInfo*
   std::string unified;
   if (format != MeshFormat::kPly) data = detail::lone_cr_to_lf(data, unified);
   ReadInfo local;
+  local.want_sources = info != nullptr && info->want_sources;
   TriMesh mesh;
   switch (format) {
     case MeshFormat::kObj: mesh = detail::read_obj(path, data, local); break;
@@ -81,9 +83,25 @@ TriMesh read_mesh_data(const std::string& path, std::string_view data, ReadInfo*
   } catch (const InvalidInput& e) {
     throw IoError(path, std::string("invalid mesh: ") + e.what());
   }
-  if (info != nullptr) *info = local;
+  if (info != nullptr) *info = std::move(local);
   return mesh;
 }
+
+namespace detail {
+
+void add_face_source(const std::string& path, ReadInfo& info, std::size_t line, std::uint64_t corners,
+                     std::size_t triangles) {
+  const std::size_t face = info.face_lines.size();
+  // Face numbers are 32-bit like vertex ids; only a file of more than 4 billion faces gets here, and only
+  // when provenance was asked for.
+  if (face >= kInvalid || corners >= kInvalid)
+    throw IoError(path, "too many faces for 32-bit face numbers", line);
+  info.face_lines.push_back(line);
+  info.face_corners.push_back(static_cast<Index>(corners));
+  info.triangle_face.insert(info.triangle_face.end(), triangles, static_cast<Index>(face));
+}
+
+}  // namespace detail
 
 void write_mesh(const std::string& path, const TriMesh& mesh, const WriteOptions& options) {
   const MeshFormat format = mesh_format_from_path(path);

@@ -38,6 +38,7 @@
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "multitri/tri_mesh.hpp"
 
@@ -45,17 +46,45 @@ namespace varmesh {
 
 enum class MeshFormat { kObj, kOff, kPly };
 
-/// What a reader noticed and repaired on the way (never silently).
+/// What a reader noticed and repaired on the way (never silently), and, on request, where each triangle
+/// came from in the file.
+///
+/// Provenance is opt-in: set want_sources before the call and the reader fills the vectors below; left
+/// false, they stay empty and the reader does no extra work beyond one test per face and per vertex. A
+/// file face is a polygon as the file lists it (OBJ f statement, OFF face line, PLY face list) or a PLY
+/// triangle strip, numbered from 0 in file order (PLY: face and tristrips elements in header order). A
+/// polygon of k corners (c0, ..., c(k-1)) gives the k - 2 consecutive triangles (c0, c(i-1), c(i)), i = 2..k,
+/// so face f's corners are c0 and c1 of its first triangle followed by c2 of each of its triangles (the
+/// readers drop no polygon: a repeated corner is kept, as the file has it). A strip gives its triangles
+/// after dropping those with a repeated vertex (strip_degenerates_dropped), so its triangles do not rebuild
+/// it: face_corners is 0 for a strip, and a strip all of whose triangles were dropped owns none.
 struct ReadInfo {
   std::size_t polygons_triangulated = 0;   ///< faces with more than 3 corners
   std::size_t attribute_conflicts = 0;     ///< OBJ corners whose vt/vn disagreed with the vertex's first one
   std::size_t strip_degenerates_dropped = 0;  ///< PLY tristrip triangles with a repeated vertex
+  /// What the file calls vertex 0: 1 in OBJ (which counts from 1), 0 in OFF and PLY. Always set.
+  Index first_vertex_number = 0;
+
+  /// Set to true before reading to receive the provenance below; it stays set in the result.
+  bool want_sources = false;
+  /// Per output triangle: the file face it came from. Non-decreasing (faces give their triangles in order).
+  std::vector<Index> triangle_face;
+  /// Per file face: its corner count (3 or more; 0 for a PLY triangle strip).
+  std::vector<Index> face_corners;
+  /// Per file face: the 1-based line where it starts (OBJ: the f statement's first line, also when
+  /// continued; OFF and ascii PLY: the line of its first number). 0 in a binary PLY body, which has no
+  /// lines.
+  std::vector<std::size_t> face_lines;
+  /// Per vertex: the 1-based line where it starts, as face_lines (0 in a binary PLY body).
+  std::vector<std::size_t> vertex_lines;
 };
 
 /// Chooses the format from the extension (.obj, .off, .ply, case-insensitive); throws IoError otherwise.
 MeshFormat mesh_format_from_path(const std::string& path);
 
-/// Reads a mesh; throws IoError as described above. `info` (optional) receives repair counts.
+/// Reads a mesh; throws IoError as described above. `info` (optional) receives repair counts, and the
+/// provenance when info->want_sources is set on entry (see ReadInfo); it is left as it was when reading
+/// fails.
 TriMesh read_mesh(const std::string& path, ReadInfo* info = nullptr);
 
 /// Reads a mesh from a file's contents already in memory (a member of an archive, say): `name` gives the

@@ -51,6 +51,7 @@ class ObjParser {
       : path_(path), cur_(data, path, '#', true), info_(info) {}
 
   TriMesh run() {
+    info_.first_vertex_number = 1;
     while (cur_.skip_empty_lines()) {
       cur_.begin_statement();
       last_line_ = cur_.line();
@@ -100,6 +101,7 @@ class ObjParser {
     // A 4th number is the rational weight w, meaningful for curves only.
     if (mesh_.positions.size() + 1 >= kInvalid) cur_.fail_statement("too many vertices for 32-bit indices");
     mesh_.positions.push_back(p);
+    if (info_.want_sources) info_.vertex_lines.push_back(cur_.statement_line());
   }
 
   void parse_vt() {
@@ -182,6 +184,7 @@ class ObjParser {
       mesh_.indices.push_back(polygon_[k - 1]);
       mesh_.indices.push_back(polygon_[k]);
     }
+    if (info_.want_sources) add_face_source(path_, info_, cur_.statement_line(), polygon_.size(), polygon_.size() - 2);
   }
 
   void check_max(const MaxRef& max_ref, std::size_t count, const char* kind, const char* statement) {

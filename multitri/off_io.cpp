@@ -112,6 +112,7 @@ TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info)
   if (nf == 0) throw IoError(path, "no faces (empty mesh): the face count is 0", counts_line);
 
   TriMesh mesh;
+  info.first_vertex_number = 0;
   mesh.positions.resize(nv);
   if (has_normal) mesh.normals.resize(nv);
   if (has_color) mesh.colors.resize(nv);
@@ -120,6 +121,7 @@ TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info)
   for (std::uint64_t v = 0; v < nv; ++v) {
     if (!cur.skip_empty_lines())
       cur.fail("truncated: expected " + std::to_string(nv) + " vertices, found " + std::to_string(v));
+    if (info.want_sources) info.vertex_lines.push_back(cur.line());
     glm::vec3& p = mesh.positions[v];
     p.x = cur.read_float("vertex x");
     p.y = cur.read_float("vertex y");
@@ -157,6 +159,7 @@ TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info)
   for (std::uint64_t f = 0; f < nf; ++f) {
     if (!cur.skip_empty_lines())
       cur.fail("truncated: expected " + std::to_string(nf) + " faces, found " + std::to_string(f));
+    const std::size_t face_line = cur.line();
     const std::int64_t n = cur.read_int("face corner count");
     if (n < 3) cur.fail("face has " + std::to_string(n) + " corners (at least 3 needed)");
     if (n > 3) ++info.polygons_triangulated;
@@ -182,6 +185,8 @@ TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info)
       }
       prev = idx;
     }
+    if (info.want_sources)
+      add_face_source(path, info, face_line, static_cast<std::uint64_t>(n), static_cast<std::size_t>(n - 2));
     // The rest of the line is an optional face colour, which TriMesh does not store.
     cur.next_line();
   }

@@ -336,6 +336,8 @@ class BinarySource {
         swap_(big_endian != (std::endian::native == std::endian::big)) {}
 
   [[noreturn]] void fail(const std::string& reason) const { throw IoError(path_, reason, IoError::kNoLine, mark_); }
+  // A binary body has no lines (ReadInfo's provenance says 0).
+  std::size_t line() const { return 0; }
 
   double scalar(PlyType t, const char* what) { return real_at(take(type_size(t), what), t, swap_); }
   std::int64_t integer(PlyType t, const char* what) { return integer_at(take(type_size(t), what), t, swap_); }
@@ -406,6 +408,12 @@ class AsciiSource {
   [[noreturn]] void fail(const std::string& reason) const {
     throw IoError(cur_.file(), reason, cur_.line() + first_line_ - 1);
   }
+  // The line of the next value: values may be spread over lines in any way, so this is where the next
+  // element starts when called before it.
+  std::size_t line() {
+    cur_.skip_empty_lines();
+    return cur_.line() + first_line_ - 1;
+  }
 
   double scalar(PlyType t, const char* what) {
     const std::string_view tok = next(what);
@@ -468,7 +476,8 @@ class AsciiSource {
 
 class BodyReader {
  public:
-  BodyReader(const PlyHeader& h, TriMesh& mesh, ReadInfo& info) : h_(h), mesh_(mesh), info_(info) {
+  BodyReader(const std::string& path, const PlyHeader& h, TriMesh& mesh, ReadInfo& info)
+      : path_(path), h_(h), mesh_(mesh), info_(info) {
     nv_ = h.vertex->count;
   }
 
@@ -518,6 +527,7 @@ class BodyReader {
   void read_vertices(Src& src, const PlyElement& el) {
     float vals[kNumValueRoles] = {};
     for (std::uint64_t i = 0; i < el.count; ++i) {
+      if (info_.want_sources) info_.vertex_lines.push_back(src.line());
       for (const PlyProperty& p : el.props) {
         if (p.is_list) {
           skip_list(src, p);
@@ -562,6 +572,9 @@ class BodyReader {
   template <class Src>
   void read_faces(Src& src, const PlyElement& el, bool strips) {
     for (std::uint64_t i = 0; i < el.count; ++i) {
+      const std::size_t line = info_.want_sources ? src.line() : 0;
+      const std::size_t triangles_before = info_.want_sources ? mesh_.indices.size() / 3 : 0;
+      std::uint64_t corners = 0;
       for (const PlyProperty& p : el.props) {
         if (p.role != Role::kIndices) {
           if (p.is_list) skip_list(src, p);
@@ -573,7 +586,10 @@ class BodyReader {
         src.begin_list(static_cast<std::uint64_t>(n), p.type, strips ? "a triangle strip" : "a face");
         if (strips) read_strip(src, p, i, static_cast<std::uint64_t>(n));
         else read_polygon(src, p, i, n);
+        corners = strips ? 0 : static_cast<std::uint64_t>(n);
       }
+      // A strip owns the triangles it kept, none of them when all were degenerate.
+      if (info_.want_sources) add_face_source(path_, info_, line, corners, mesh_.indices.size() / 3 - triangles_before);
     }
   }
 
@@ -621,6 +637,7 @@ class BodyReader {
     }
   }
 
+  const std::string& path_;
   const PlyHeader& h_;
   TriMesh& mesh_;
   ReadInfo& info_;
@@ -685,7 +702,8 @@ TriMesh read_ply(const std::string& path, std::string_view data, ReadInfo& info)
     if (el.kind == ElementKind::kFace)
       mesh.indices.reserve(mesh.indices.size() + static_cast<std::size_t>(std::min(el.count, most_triangles)) * 3);
 
-  BodyReader reader(h, mesh, info);
+  info.first_vertex_number = 0;
+  BodyReader reader(path, h, mesh, info);
   if (h.format == PlyFormat::kAscii) {
     std::string body_storage;
     AsciiSource src(path, lone_cr_to_lf(data.substr(h.body_offset), body_storage), 0, h.body_line);

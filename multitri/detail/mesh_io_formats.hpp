@@ -3,8 +3,11 @@
 ///
 /// Readers parse the whole file `data` (already in memory) and throw IoError naming `path` with a line
 /// (text) or byte offset (binary) and a reason, including "no faces" for a mesh without any face. The
-/// caller runs TriMesh::validate afterwards. `info` has been reset by the caller; readers add to it.
+/// caller runs TriMesh::validate afterwards. `info` has been reset by the caller, with want_sources as the
+/// caller asked; readers add to it and set first_vertex_number.
 /// Writers return the complete file contents; the caller validates the mesh first and writes atomically.
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -20,6 +23,12 @@ namespace varmesh::detail {
 TriMesh read_obj(const std::string& path, std::string_view data, ReadInfo& info);
 TriMesh read_off(const std::string& path, std::string_view data, ReadInfo& info);
 TriMesh read_ply(const std::string& path, std::string_view data, ReadInfo& info);
+
+/// Records one file face of ReadInfo's provenance, for readers asked for it (info.want_sources): its
+/// line, its corner count (0 for a strip) and the `triangles` triangles it gave, the last ones added to the
+/// mesh. Throws IoError naming `path` and `line` when the face count leaves 32-bit numbers.
+void add_face_source(const std::string& path, ReadInfo& info, std::size_t line, std::uint64_t corners,
+                     std::size_t triangles);
 
 std::string format_obj(const TriMesh& mesh);
 /// OFF, COFF, NOFF or CNOFF by the attributes present; texcoords are not written.

@@ -5,11 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "apps/cli_support.hpp"
@@ -213,15 +215,58 @@ TEST(CliSubdiv, NonManifoldPolygonFileIsNamedInTheFilesTerms) {
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(contains(r.err, "fin3.obj:8: the edge 1-2 belongs to 3 faces, faces 1, 2 and 3 (lines 6, 7 and 8)")) << r.err;
   EXPECT_FALSE(fs::exists(out));
+
+  // PLY counts vertices from 0 like OFF; an ascii body has lines (a face spread over two here), a binary one
+  // only face numbers. Three quads on the edge 0-1.
+  const std::string head = "ply\nformat %s 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                           "property float z\nelement face 3\nproperty list uchar int vertex_indices\nend_header\n";
+  const float xyz[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, -1, 0}, {1, -1, 0}, {0, 0, 1}, {1, 0, 1}};
+  const std::vector<std::vector<std::int32_t>> quads = {{0, 1, 2, 3}, {1, 0, 4, 5}, {0, 1, 7, 6}};
+  std::string ascii = head, binary = head;
+  auto le32 = [&binary](std::uint32_t u) {
+    for (int k = 0; k < 4; ++k) binary += static_cast<char>((u >> (8 * k)) & 0xffu);
+  };
+  ascii.replace(ascii.find("%s"), 2, "ascii");
+  binary.replace(binary.find("%s"), 2, "binary_little_endian");
+  for (const auto& p : xyz) {
+    ascii += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
+    for (float c : p) le32(std::bit_cast<std::uint32_t>(c));
+  }
+  ascii += "4 0 1 2 3\n4 1 0 4 5\n4\n0 1 7 6\n";  // faces on lines 18, 19 and 20
+  for (const auto& q : quads) {
+    binary += '\4';
+    for (std::int32_t c : q) le32(static_cast<std::uint32_t>(c));
+  }
+  write_text(dir / "fin_ascii.ply", ascii);
+  write_text(dir / "fin_binary.ply", binary);
+  r = run("subdiv " + (dir / "fin_ascii.ply").string() + " --levels 1 -o " + out, dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "fin_ascii.ply:20: the edge 0-1 belongs to 3 faces, faces 1, 2 and 3 (lines 18, 19 and "
+                              "20): a non-manifold edge"))
+      << r.err;
+  r = run("subdiv " + (dir / "fin_binary.ply").string() + " --levels 1 -o " + out, dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "fin_binary.ply: the edge 0-1 belongs to 3 faces, faces 1, 2 and 3: a non-manifold edge"))
+      << r.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
-// file_faces on hand-made text: polygons of any size come back with their corners and lines, whatever
-// the line ends; a scan that cannot follow the file gives nothing.
-TEST(FileFaces, ScansObjAndOffFaces) {
+// The reader's provenance read with the mesh.
+std::pair<TriMesh, ReadInfo> read_with_sources(const std::string& name, const std::string& text) {
+  ReadInfo info;
+  info.want_sources = true;
+  TriMesh m = read_mesh_data(name, text, &info);
+  return {std::move(m), std::move(info)};
+}
+
+// file_faces from the readers' provenance on hand-made text: polygons of any size come back with their
+// corners and lines, whatever the line ends; provenance that does not describe the mesh, or triangle strips,
+// give nothing.
+TEST(FileFaces, FromTheReadersProvenance) {
   const std::string obj = "\xEF\xBB\xBFv 0 0 0\rv 1 0 0\r\nv 2 1 0\nv 1 2 0\nv 0 2 0 # five\nv -1 1 0\n"
                           "f 1 2 3 4 5 6\r\n# a comment\n\nf -6 -4 -3\n";
-  const TriMesh m = read_mesh_data("hex.obj", obj);
-  const std::optional<app::FileFaces> ff = app::file_faces("hex.obj", obj, m);
+  const auto [m, info] = read_with_sources("hex.obj", obj);
+  const std::optional<app::FileFaces> ff = app::file_faces(m, info);
   ASSERT_TRUE(ff);
   EXPECT_EQ(ff->offsets, (std::vector<std::size_t>{0, 6, 9}));
   EXPECT_EQ(ff->corners, (std::vector<Index>{0, 1, 2, 3, 4, 5, 0, 2, 3}));
@@ -230,22 +275,44 @@ TEST(FileFaces, ScansObjAndOffFaces) {
   EXPECT_EQ(ff->first_vertex, 1u);
 
   const std::string off = "OFF 4\n\n 2 # counts on two lines\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3 255 0 0\n3 0 2 1\n";
-  const TriMesh mo = read_mesh_data("q.off", off);
-  const std::optional<app::FileFaces> fo = app::file_faces("q.off", off, mo);
+  const auto [mo, info_o] = read_with_sources("q.off", off);
+  const std::optional<app::FileFaces> fo = app::file_faces(mo, info_o);
   ASSERT_TRUE(fo);
   EXPECT_EQ(fo->corners, (std::vector<Index>{0, 1, 2, 3, 0, 2, 1}));
   EXPECT_EQ(fo->lines, (std::vector<std::size_t>{8, 9}));
   EXPECT_EQ(fo->vertex_lines, (std::vector<std::size_t>{4, 5, 6, 7}));
   EXPECT_EQ(fo->first_vertex, 0u);
 
-  // Another file's mesh, or another format: nothing.
-  EXPECT_FALSE(app::file_faces("hex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", m));
-  EXPECT_FALSE(app::file_faces("hex.ply", obj, m));
+  // Another file's mesh, or a read that asked for no provenance: nothing.
+  EXPECT_FALSE(app::file_faces(mo, info));
+  EXPECT_FALSE(app::file_faces(m, info_o));
+  ReadInfo plain;
+  EXPECT_FALSE(app::file_faces(read_mesh_data("hex.obj", obj, &plain), plain));
+
+  // The same quad and triangle as a PLY: ascii lines, binary none.
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n\n3 0 2 1\n";
+  const auto [mp, info_p] = read_with_sources("q.ply", ply);
+  const std::optional<app::FileFaces> fp = app::file_faces(mp, info_p);
+  ASSERT_TRUE(fp);
+  EXPECT_EQ(fp->corners, fo->corners);
+  EXPECT_EQ(fp->offsets, fo->offsets);
+  EXPECT_EQ(fp->lines, (std::vector<std::size_t>{14, 16}));
+  EXPECT_EQ(fp->vertex_lines, (std::vector<std::size_t>{10, 11, 12, 13}));
+  EXPECT_EQ(fp->first_vertex, 0u);
+
+  // Triangle strips are no polygons.
+  const std::string strips = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                             "property float z\nelement tristrips 1\nproperty list uchar int vertex_indices\n"
+                             "end_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n4 0 1 2 3\n";
+  const auto [ms, info_s] = read_with_sources("s.ply", strips);
+  EXPECT_FALSE(app::file_faces(ms, info_s));
 }
 
 // A polygon file made by cutting and damaging a grid of quads and triangles (faces reversed, doubled,
 // fins added across edges, faces removed, a corner repeated, the order shuffled), written as OBJ and OFF with
-// comments, blank lines and mixed line ends. The scan must give back the faces as written, and
+// comments, blank lines and mixed line ends. The provenance must give back the faces as written, and
 // topology_problem must find a problem exactly when PolyMesh::validate() refuses the same faces.
 TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
   std::mt19937 rng(93);
@@ -333,8 +400,8 @@ TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
         }
       }
       const std::string name = as_obj ? "r.obj" : "r.off";
-      const TriMesh m = read_mesh_data(name, text);
-      const std::optional<app::FileFaces> ff = app::file_faces(name, text, m);
+      const auto [m, info] = read_with_sources(name, text);
+      const std::optional<app::FileFaces> ff = app::file_faces(m, info);
       ASSERT_TRUE(ff) << text;
       ASSERT_EQ(ff->num_faces(), faces.size());
       for (std::size_t f = 0; f < faces.size(); ++f) {

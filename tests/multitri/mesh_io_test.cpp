@@ -974,6 +974,265 @@ TEST(MeshIoPly, BinaryBodyEndsWithTheLastElement) {
   }
 }
 
+// Provenance (ReadInfo::want_sources): each file face's corners rebuilt from the triangles and the
+// triangle -> face map, as face_corners says, must be the polygon the file lists.
+std::vector<std::vector<Index>> rebuilt_polygons(const TriMesh& m, const ReadInfo& info) {
+  std::vector<std::vector<Index>> faces(info.face_corners.size());
+  EXPECT_EQ(info.triangle_face.size(), m.num_faces());
+  EXPECT_EQ(info.face_lines.size(), info.face_corners.size());
+  for (std::size_t t = 0; t < std::min(info.triangle_face.size(), m.num_faces()); ++t) {
+    EXPECT_TRUE(t == 0 || info.triangle_face[t - 1] <= info.triangle_face[t]) << t;
+    std::vector<Index>& f = faces.at(info.triangle_face[t]);
+    if (f.empty()) {
+      f = {m.corner(t, 0), m.corner(t, 1)};
+    } else {  // the fan (c0, c(i-1), c(i)) continues
+      EXPECT_EQ(m.corner(t, 0), f[0]) << t;
+      EXPECT_EQ(m.corner(t, 1), f.back()) << t;
+    }
+    f.push_back(m.corner(t, 2));
+  }
+  for (std::size_t f = 0; f < faces.size(); ++f) EXPECT_EQ(faces[f].size(), info.face_corners[f]) << f;
+  return faces;
+}
+
+// A file written with what each face and vertex should be reported as.
+struct ProvenanceFile {
+  std::string text;
+  std::vector<std::vector<Index>> faces;
+  std::vector<std::size_t> face_lines, vertex_lines;
+};
+
+// Triangles, quads and pentagons over `nv` vertices, now and then with a repeated corner (kept as written).
+std::vector<std::vector<Index>> random_polygons(std::mt19937& rng, Index nv, std::size_t count) {
+  std::vector<std::vector<Index>> faces;
+  for (std::size_t f = 0; f < count; ++f) {
+    std::vector<Index> c(3 + rng() % 3);
+    for (Index& i : c) i = static_cast<Index>(rng() % nv);
+    faces.push_back(c);
+  }
+  return faces;
+}
+
+// Counts lines as the readers do while text is appended; `end` is the line end to use next.
+struct LineWriter {
+  std::string text;
+  std::size_t line = 1;
+  void put(const std::string& s, const char* end = "\n") {
+    text += s;
+    text += end;
+    ++line;
+  }
+};
+
+// OBJ with CRLF and LF mixed, comments and blank lines, continued v and f statements, positive and negative
+// (relative) indices and corner forms with texcoords.
+ProvenanceFile provenance_obj(std::mt19937& rng, Index nv, std::size_t nf) {
+  ProvenanceFile file;
+  file.faces = random_polygons(rng, nv, nf);
+  LineWriter w;
+  auto end = [&rng] { return rng() % 2 ? "\r\n" : "\n"; };
+  w.put("# provenance", end());
+  w.put("vt 0 0", end());
+  for (Index v = 0; v < nv; ++v) {
+    if (rng() % 4 == 0) w.put("", end());
+    file.vertex_lines.push_back(w.line);
+    if (rng() % 4 == 0) {
+      w.put("v " + std::to_string(v) + " 1 \\", end());
+      w.put("  2", end());
+    } else {
+      w.put("v " + std::to_string(v) + " 1 2", end());
+    }
+  }
+  for (const std::vector<Index>& f : file.faces) {
+    if (rng() % 4 == 0) w.put("# between faces", end());
+    file.face_lines.push_back(w.line);
+    std::string s = "f";
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const std::int64_t i = rng() % 2 ? std::int64_t{f[k]} + 1 : std::int64_t{f[k]} - std::int64_t{nv};
+      s += " " + std::to_string(i) + (rng() % 3 == 0 ? "/1" : "");
+      if (k + 1 < f.size() && rng() % 5 == 0) {  // continued after this corner
+        w.put(s + " \\", end());
+        s.clear();
+      }
+    }
+    w.put(s, end());
+  }
+  file.text = std::move(w.text);
+  return file;
+}
+
+// OFF whose counts sit on two lines after a comment, with blank lines between vertices and face colours.
+ProvenanceFile provenance_off(std::mt19937& rng, Index nv, std::size_t nf) {
+  ProvenanceFile file;
+  file.faces = random_polygons(rng, nv, nf);
+  LineWriter w;
+  w.put("OFF");
+  w.put("# counts on two lines");
+  w.put(std::to_string(nv));
+  w.put("  " + std::to_string(nf) + " 0");
+  for (Index v = 0; v < nv; ++v) {
+    if (rng() % 4 == 0) w.put("");
+    file.vertex_lines.push_back(w.line);
+    w.put(std::to_string(v) + " 1 2");
+  }
+  for (const std::vector<Index>& f : file.faces) {
+    if (rng() % 4 == 0) w.put("# a comment line");
+    file.face_lines.push_back(w.line);
+    std::string s = std::to_string(f.size());
+    for (Index c : f) s += " " + std::to_string(c);
+    w.put(s + (rng() % 3 == 0 ? " 255 0 0" : ""));
+  }
+  file.text = std::move(w.text);
+  return file;
+}
+
+// PLY with a skipped scalar before the index list; ascii (a vertex or face now and then spread over two
+// lines, blank lines between) or binary (no lines: 0).
+ProvenanceFile provenance_ply(std::mt19937& rng, Index nv, std::size_t nf, const char* format) {
+  ProvenanceFile file;
+  file.faces = random_polygons(rng, nv, nf);
+  const bool ascii = std::string(format) == "ascii";
+  LineWriter w;
+  w.put("ply");
+  w.put(std::string("format ") + format + " 1.0");
+  w.put("element vertex " + std::to_string(nv));
+  w.put("property float x");
+  w.put("property float y");
+  w.put("property float z");
+  w.put("element face " + std::to_string(nf));
+  w.put("property uchar flags");
+  w.put("property list uchar int vertex_indices");
+  w.put("end_header");
+  Bytes b(std::string(format) == "binary_big_endian");
+  for (Index v = 0; v < nv; ++v) {
+    if (!ascii) {
+      b.put(static_cast<float>(v)).put(1.0f).put(2.0f);
+      file.vertex_lines.push_back(0);
+      continue;
+    }
+    if (rng() % 4 == 0) w.put("");
+    file.vertex_lines.push_back(w.line);
+    if (rng() % 4 == 0) {
+      w.put(std::to_string(v) + " 1");
+      w.put("2");
+    } else {
+      w.put(std::to_string(v) + " 1 2");
+    }
+  }
+  for (const std::vector<Index>& f : file.faces) {
+    if (!ascii) {
+      b.put(std::uint8_t{7}).put(static_cast<std::uint8_t>(f.size()));
+      for (Index c : f) b.put(static_cast<std::int32_t>(c));
+      file.face_lines.push_back(0);
+      continue;
+    }
+    if (rng() % 4 == 0) w.put("");
+    file.face_lines.push_back(w.line);
+    std::string s = "7 " + std::to_string(f.size());
+    if (rng() % 4 == 0) {
+      w.put(s);
+      s.clear();
+    }
+    for (Index c : f) s += " " + std::to_string(c);
+    w.put(s);
+  }
+  file.text = std::move(w.text) + b.str();
+  return file;
+}
+
+void expect_provenance(const std::string& name, const ProvenanceFile& file, Index first_vertex_number) {
+  ReadInfo info;
+  info.want_sources = true;
+  const TriMesh m = read_mesh_data(name, file.text, &info);
+  EXPECT_TRUE(info.want_sources);
+  EXPECT_EQ(rebuilt_polygons(m, info), file.faces);
+  EXPECT_EQ(info.face_lines, file.face_lines);
+  EXPECT_EQ(info.vertex_lines, file.vertex_lines);
+  EXPECT_EQ(info.first_vertex_number, first_vertex_number);
+
+  // Not asked for: no provenance, the same mesh and counts.
+  ReadInfo plain;
+  const TriMesh same = read_mesh_data(name, file.text, &plain);
+  EXPECT_EQ(same.indices, m.indices);
+  EXPECT_EQ(plain.polygons_triangulated, info.polygons_triangulated);
+  EXPECT_EQ(plain.first_vertex_number, first_vertex_number);
+  EXPECT_TRUE(plain.triangle_face.empty() && plain.face_corners.empty() && plain.face_lines.empty() &&
+              plain.vertex_lines.empty());
+}
+
+TEST(MeshIoProvenance, RebuildsEveryPolygonWithItsLine) {
+  std::mt19937 rng(95);
+  for (int round = 0; round < 40; ++round) {
+    SCOPED_TRACE(round);
+    const Index nv = static_cast<Index>(3 + rng() % 10);
+    const std::size_t nf = 1 + rng() % 12;
+    {
+      const ProvenanceFile f = provenance_obj(rng, nv, nf);
+      SCOPED_TRACE(f.text);
+      expect_provenance("p.obj", f, 1);
+    }
+    {
+      const ProvenanceFile f = provenance_off(rng, nv, nf);
+      SCOPED_TRACE(f.text);
+      expect_provenance("p.off", f, 0);
+    }
+    for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+      SCOPED_TRACE(format);
+      const ProvenanceFile f = provenance_ply(rng, nv, nf, format);
+      expect_provenance("p.ply", f, 0);
+    }
+  }
+}
+
+// A hand-made OBJ with every feature at once, checked against numbers worked out by hand.
+TEST(MeshIoProvenance, ObjByHand) {
+  const std::string obj = "v 0 0 0\r\nv 1 0 0\r\nv 1 1 \\\r\n 0\r\nv 0 1 0\nv 2 0 0\n# five\n"
+                          "f 1 2 3 4\r\n"         // line 8
+                          "f -4 \\\n  -1 -3\n"   // line 9, a continued triangle (2 5 3)
+                          "\n"
+                          "f 1/1 2 5 3 \\\n4\n";  // line 12, a pentagon on two lines
+  ReadInfo info;
+  info.want_sources = true;
+  const TriMesh m = read_mesh_data("hand.obj", obj + "vt 0 0\n", &info);
+  EXPECT_EQ(rebuilt_polygons(m, info), (std::vector<std::vector<Index>>{{0, 1, 2, 3}, {1, 4, 2}, {0, 1, 4, 2, 3}}));
+  EXPECT_EQ(info.triangle_face, (std::vector<Index>{0, 0, 1, 2, 2, 2}));
+  EXPECT_EQ(info.face_corners, (std::vector<Index>{4, 3, 5}));
+  EXPECT_EQ(info.face_lines, (std::vector<std::size_t>{8, 9, 12}));
+  EXPECT_EQ(info.vertex_lines, (std::vector<std::size_t>{1, 2, 3, 5, 6}));
+  EXPECT_EQ(info.polygons_triangulated, 2u);
+}
+
+// Triangle strips are no polygons (face_corners 0); a strip whose triangles were all dropped owns none.
+TEST(MeshIoProvenance, PlyStripsOwnTheTrianglesTheyKept) {
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                          "element tristrips 3\nproperty list int int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 0 0\n2 1 0\n"
+                          "4 0 1 3 2\n"     // line 18, face 0
+                          "4 0 1 2 3\n"     // line 19, strip: 2 triangles
+                          "3 4 4 5\n"       // line 20, strip: degenerate, dropped
+                          "\n5 1 4 3 5 -1\n";  // line 22, strip: 2 triangles
+  ReadInfo info;
+  info.want_sources = true;
+  const TriMesh m = read_mesh_data("s.ply", ply, &info);
+  EXPECT_EQ(info.strip_degenerates_dropped, 1u);
+  EXPECT_EQ(m.num_faces(), 6u);
+  EXPECT_EQ(info.triangle_face, (std::vector<Index>{0, 0, 1, 1, 3, 3}));
+  EXPECT_EQ(info.face_corners, (std::vector<Index>{4, 0, 0, 0}));
+  EXPECT_EQ(info.face_lines, (std::vector<std::size_t>{18, 19, 20, 22}));
+  EXPECT_EQ(info.vertex_lines, (std::vector<std::size_t>{12, 13, 14, 15, 16, 17}));
+}
+
+// A failed read leaves `info` as it was.
+TEST(MeshIoProvenance, FailedReadLeavesInfoAlone) {
+  ReadInfo info;
+  info.want_sources = true;
+  info.face_lines = {42};
+  EXPECT_THROW(read_mesh_data("bad.obj", "v 0 0 0\nf 1 2 3\n", &info), IoError);
+  EXPECT_EQ(info.face_lines, (std::vector<std::size_t>{42}));
+  EXPECT_TRUE(info.triangle_face.empty());
+}
+
 TEST(MeshIoWrite, MissingFolderThrowsAndCreatesNothing) {
   const fs::path dir = testing::scratch_dir("mesh_io_write_missing");
   const TriMesh mesh = awkward_mesh(true, true, true);
