@@ -1,11 +1,16 @@
 // A program outside the varmesh tree, built against the installed package: a 4-8 terrain hierarchy
-// extracted within an error bound, and a progressive-mesh hierarchy refined selectively, by hand and by a
-// view query. Exits non-zero if anything is off, so CI notices a broken install. The pm part is the example
-// README's "Progressive meshes" section shows.
+// extracted within an error bound, a progressive-mesh hierarchy refined selectively, by hand and by a
+// view query, and a subdivision surface, uniform and adaptive. Exits non-zero if anything is off, so CI
+// notices a broken install. The pm and subdivision parts are the examples README shows.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include <fourk/grid48.hpp>
+#include <fourk/poly_mesh.hpp>
+#include <fourk/subdiv.hpp>
 #include <multitri/camera.hpp>
+#include <multitri/mt_front.hpp>
 #include <multitri/query.hpp>
 #include <multitri/shapes.hpp>
 #include <multitri/terrain_gen.hpp>
@@ -60,10 +65,36 @@ bool progressive_mesh() {
   return split && one_more && near_faces > out.num_faces() && out.num_faces() > 0;
 }
 
+bool subdivision() {
+  const varmesh::PolyMesh cube = varmesh::make_quad_cube();  // or pair_triangles(read_mesh(path))
+  // Uniform: two binary 4-8 steps are one Catmull-Clark level; four steps, two levels.
+  const varmesh::SubdivMesh cc = varmesh::subdivide(cube, varmesh::SubdivScheme::kCatmullClark, 4);
+  const std::vector<glm::dvec3> limit = varmesh::catmull_clark_limit_positions(cc);
+  const varmesh::TriMesh uniform = cc.to_tri_mesh();
+  // The limit surface of a cube lies strictly inside it (its control points are the cube's corners).
+  double reach = 0.0;
+  for (const glm::dvec3& p : limit) reach = std::max({reach, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+
+  // Adaptive: the binary steps of 4-8 subdivision as a Multi-Triangulation; any query gives a conforming
+  // front through points of the uniform result, here within 1 % of the cube's size of it.
+  varmesh::SubdivMtInfo info;
+  const varmesh::Mt mt = varmesh::build_subdivision_mt(cube, varmesh::SubdivScheme::kFourEight, 8, &info);
+  varmesh::MtFront front(mt);
+  varmesh::Query q;
+  q.criterion = varmesh::Criterion::object_error(0.02f);
+  varmesh::extract(front, q);
+  const varmesh::TriMesh adaptive = front.to_mesh();
+  std::printf("consumer: subdiv Catmull-Clark 2 levels %zu quads, limit within %.3f of the centre; 4-8 adaptive %zu of %zu triangles\n",
+              cc.topo.num_faces, reach, adaptive.num_faces(), info.uniform_faces);
+  return cc.topo.num_faces == 6 * 16 && uniform.num_faces() == 2 * cc.topo.num_faces && limit.size() == cc.topo.num_vertices &&
+         reach < 1.0 && adaptive.num_faces() > 12 && adaptive.num_faces() < info.uniform_faces;
+}
+
 }  // namespace
 
 int main() {
   const bool ok_terrain = terrain();
   const bool ok_pm = progressive_mesh();
-  return ok_terrain && ok_pm ? 0 : 1;
+  const bool ok_subdiv = subdivision();
+  return ok_terrain && ok_pm && ok_subdiv ? 0 : 1;
 }
