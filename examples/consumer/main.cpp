@@ -1,6 +1,6 @@
 // A program outside the varmesh tree, built against the installed package: a 4-8 terrain hierarchy
 // extracted within an error bound, a progressive-mesh hierarchy refined selectively, by hand and by a
-// view query, and a subdivision surface, uniform and adaptive. Exits non-zero if anything is off, so CI
+// view query, a subdivision surface, uniform and adaptive, and a Multi-Triangulation built by hand. Exits non-zero if anything is off, so CI
 // notices a broken install. The pm and subdivision parts are the examples README shows.
 #include <algorithm>
 #include <cmath>
@@ -10,6 +10,7 @@
 #include <fourk/poly_mesh.hpp>
 #include <fourk/subdiv.hpp>
 #include <multitri/camera.hpp>
+#include <multitri/mt.hpp>
 #include <multitri/mt_front.hpp>
 #include <multitri/query.hpp>
 #include <multitri/shapes.hpp>
@@ -90,11 +91,37 @@ bool subdivision() {
          reach < 1.0 && adaptive.num_faces() > 12 && adaptive.num_faces() < info.uniform_faces;
 }
 
+bool hand_made_mt() {
+  // A unit square of two triangles (diagonal 0-2) and one modification: a vertex raised 0.1 above the
+  // diagonal's midpoint splits both triangles into four. The node's error is how far its pre-image (the
+  // flat square) is from the finest data.
+  varmesh::MtBuilder b;
+  const varmesh::VertexId v0 = b.add_vertex({0, 0, 0}), v1 = b.add_vertex({1, 0, 0}), v2 = b.add_vertex({1, 1, 0}),
+                          v3 = b.add_vertex({0, 1, 0}), m = b.add_vertex({0.5f, 0.5f, 0.1f});
+  const varmesh::FaceId base[] = {b.add_face(v0, v1, v2), b.add_face(v0, v2, v3)};
+  const varmesh::FaceId fine[] = {b.add_face(v0, v1, m), b.add_face(v1, v2, m), b.add_face(v2, v3, m), b.add_face(v3, v0, m)};
+  b.set_base(base);
+  b.add_node(varmesh::NodeKind::kSplit, base, fine, 0.1f);
+  const varmesh::Mt mt = std::move(b).build();  // checks the definition; throws InvalidInput naming the node
+
+  varmesh::MtFront front(mt);
+  varmesh::Query q;
+  q.criterion = varmesh::Criterion::object_error(0.05f);  // the flat square is 0.1 off: refine
+  varmesh::extract(front, q);
+  const std::size_t fine_faces = front.num_faces();
+  q.criterion = varmesh::Criterion::object_error(0.2f);  // within 0.2: the base is enough
+  varmesh::update(front, q);
+  std::printf("consumer: hand-made MT of %zu nodes: %zu faces at error 0.05, %zu at 0.2\n", mt.num_nodes(), fine_faces,
+              front.num_faces());
+  return mt.num_nodes() == 2 && fine_faces == 4 && front.num_faces() == 2;
+}
+
 }  // namespace
 
 int main() {
   const bool ok_terrain = terrain();
   const bool ok_pm = progressive_mesh();
   const bool ok_subdiv = subdivision();
-  return ok_terrain && ok_pm && ok_subdiv ? 0 : 1;
+  const bool ok_mt = hand_made_mt();
+  return ok_terrain && ok_pm && ok_subdiv && ok_mt ? 0 : 1;
 }
