@@ -1,13 +1,17 @@
 // A program outside the varmesh tree, built against the installed package: a 4-8 terrain hierarchy
 // extracted within an error bound, a progressive-mesh hierarchy refined selectively, by hand and by a
-// view query, a subdivision surface, uniform and adaptive, and a Multi-Triangulation built by hand. Exits non-zero if anything is off, so CI
+// view query, a subdivision surface, uniform and adaptive, 4-k hierarchies of surfaces with their triangle
+// strips, and a Multi-Triangulation built by hand. Exits non-zero if anything is off, so CI
 // notices a broken install. The pm and subdivision parts are the examples README shows.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include <fourk/grid48.hpp>
+#include <fourk/adaptive.hpp>
 #include <fourk/poly_mesh.hpp>
+#include <fourk/semiregular.hpp>
+#include <fourk/strips.hpp>
 #include <fourk/subdiv.hpp>
 #include <multitri/camera.hpp>
 #include <multitri/mt.hpp>
@@ -91,6 +95,33 @@ bool subdivision() {
          reach < 1.0 && adaptive.num_faces() > 12 && adaptive.num_faces() < info.uniform_faces;
 }
 
+bool four_k() {
+  // Semi-regular 4-8: the faces paired and bisected 4 times; a query picks any level anywhere.
+  const varmesh::TriMesh base = varmesh::make_torus(16, 8, 1.0f, 0.35f, 0.0f);  // or read_mesh(path)
+  const varmesh::Mt semi = varmesh::build_semiregular_mt(base, 4);
+  varmesh::MtFront front(semi);
+  varmesh::Query q;
+  q.criterion = varmesh::Criterion::object_error(0.0f);  // everything: the finest level
+  varmesh::extract(front, q);
+  const std::size_t finest = front.num_faces();
+
+  // Adaptive: newest-vertex bisection of the paper's torus until every face is within the tolerance; the
+  // front in the finest state is one generalized triangle strip (a bisection hierarchy's strip plan).
+  varmesh::AdaptiveOptions options;
+  options.tolerance = 0.0685f;  // the paper's figure
+  const varmesh::AdaptiveHierarchy torus = varmesh::build_adaptive_parametric(varmesh::torus_parametric(), options);
+  varmesh::MtFront adaptive(torus.mt);
+  varmesh::extract(adaptive, q);
+  const varmesh::StripPlan plan(torus.mt);
+  const varmesh::StripRuns runs = varmesh::hierarchical_strip(plan, adaptive.faces());
+  const varmesh::StripCheck check = varmesh::check_strip(torus.mt, adaptive.faces(), runs);
+  const std::vector<varmesh::Index> indices = varmesh::encode_strip(torus.mt, runs);  // GL_TRIANGLE_STRIP
+  std::printf("consumer: 4-k semi-regular %zu -> %zu faces; adaptive torus %zu faces in %zu strip run(s), %zu indices\n",
+              base.num_faces(), finest, adaptive.num_faces(), runs.size(), indices.size());
+  return finest == base.num_faces() * 16 && adaptive.num_faces() == torus.num_finest_faces && check.ok &&
+         runs.size() == 1 && indices.size() >= adaptive.num_faces() + 2;
+}
+
 bool hand_made_mt() {
   // A unit square of two triangles (diagonal 0-2) and one modification: a vertex raised 0.1 above the
   // diagonal's midpoint splits both triangles into four. The node's error is how far its pre-image (the
@@ -122,6 +153,7 @@ int main() {
   const bool ok_terrain = terrain();
   const bool ok_pm = progressive_mesh();
   const bool ok_subdiv = subdivision();
+  const bool ok_fourk = four_k();
   const bool ok_mt = hand_made_mt();
-  return ok_terrain && ok_pm && ok_subdiv && ok_mt ? 0 : 1;
+  return ok_terrain && ok_pm && ok_subdiv && ok_fourk && ok_mt ? 0 : 1;
 }
