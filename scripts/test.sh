@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs every test: set-up (packages + both builds), the Release suite, the ASan+UBSan suite, and the
-# find_package(varmesh) consumer project built against an installed copy.
+# find_package(varmesh) consumer project built against an installed copy (with README's C++ examples).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh --asan
@@ -16,6 +16,9 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 echo "== Installed package consumer =="
 rm -rf build/install build/consumer
 cmake --install build/release --prefix build/install >/dev/null
-cmake -S examples/consumer -B build/consumer -DCMAKE_PREFIX_PATH="$PWD/build/install" >/dev/null
+mkdir -p build/consumer
+scripts/readme_snippets.sh README.md build/consumer/readme_snippets.cpp
+cmake -S examples/consumer -B build/consumer -DCMAKE_PREFIX_PATH="$PWD/build/install" \
+  -DVARMESH_SNIPPETS="$PWD/build/consumer/readme_snippets.cpp" >/dev/null
 cmake --build build/consumer -j"$jobs" >/dev/null
 build/consumer/consumer
