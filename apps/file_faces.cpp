@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <unordered_map>
 
 #include "apps/cli_util.hpp"
 #include "multitri/errors.hpp"
@@ -25,8 +24,6 @@ std::string name_faces(const FileFaces& ff, const std::vector<std::size_t>& face
   if (ff.lines[faces[0]] == 0) return named;
   return named + " (" + noun_for(faces.size(), "line") + " " + lines + ")";
 }
-
-std::uint64_t edge_key(Index a, Index b) { return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b); }
 
 }  // namespace
 
@@ -75,101 +72,51 @@ std::optional<FileFaces> read_file_faces(const std::string& path) {
   return file_faces(mesh, info);
 }
 
-std::string topology_problem(const FileFaces& ff, std::size_t* line) {
-  const std::size_t nf = ff.num_faces();
-  std::size_t num_vertices = 0;
+TopologyProblem find_topology_problem(const FileFaces& ff, const TopologyRules& rules) {
+  std::size_t num_vertices = ff.vertex_lines.size();
   for (Index c : ff.corners) num_vertices = std::max<std::size_t>(num_vertices, std::size_t{c} + 1);
+  if (ff.corners.size() >= kInvalid) throw InvalidInput("topology check: 2^32 corners or more");
+  const std::vector<Index> offsets(ff.offsets.begin(), ff.offsets.end());  // each <= corners.size()
+  return varmesh::find_topology_problem(offsets, ff.corners, num_vertices, rules);
+}
+
+std::string describe_topology_problem(const FileFaces& ff, const TopologyProblem& p, std::size_t* line) {
   auto vertex = [&ff](Index v) { return std::to_string(std::uint64_t{v} + ff.first_vertex); };
   auto at = [line](std::size_t l, std::string text) {
     if (line) *line = l;
     return text;
   };
-  // Corner slots: the face of each, and the slot after each in its face.
-  std::vector<std::size_t> face_of(ff.corners.size());
-  for (std::size_t f = 0; f < nf; ++f)
-    for (std::size_t s = ff.offsets[f]; s < ff.offsets[f + 1]; ++s) face_of[s] = f;
-  auto next = [&](std::size_t s) { return s + 1 == ff.offsets[face_of[s] + 1] ? ff.offsets[face_of[s]] : s + 1; };
-
-  std::vector<std::size_t> used_by(num_vertices, SIZE_MAX);
-  for (std::size_t f = 0; f < nf; ++f)
-    for (std::size_t s = ff.offsets[f]; s < ff.offsets[f + 1]; ++s) {
-      if (used_by[ff.corners[s]] == f)
-        return at(ff.lines[f], name_faces(ff, {f}) + " lists vertex " + vertex(ff.corners[s]) +
-                                   " twice: a face needs distinct corners");
-      used_by[ff.corners[s]] = f;
-    }
-
-  // Each edge's slots in file order: the slot where a face's side along it starts.
-  std::unordered_map<std::uint64_t, std::vector<std::size_t>> edges;
-  edges.reserve(ff.corners.size());
-  for (std::size_t s = 0; s < ff.corners.size(); ++s) edges[edge_key(ff.corners[s], ff.corners[next(s)])].push_back(s);
-  // Of the edges that break a rule, the one whose last face comes first in the file, so that the message
-  // does not depend on the hash map's order.
-  auto first_edge = [&](auto&& breaks) {
-    const std::vector<std::size_t>* found = nullptr;
-    for (const auto& [key, slots] : edges)
-      if (breaks(slots) && (!found || face_of[slots.back()] < face_of[found->back()] ||
-                            (face_of[slots.back()] == face_of[found->back()] && slots.front() < found->front())))
-        found = &slots;
-    return found;
-  };
-  if (const auto* slots = first_edge([](const std::vector<std::size_t>& s) { return s.size() > 2; })) {
-    std::vector<std::size_t> faces;
-    for (std::size_t s : *slots) faces.push_back(face_of[s]);
-    const Index a = std::min(ff.corners[slots->front()], ff.corners[next(slots->front())]);
-    const Index b = std::max(ff.corners[slots->front()], ff.corners[next(slots->front())]);
-    return at(ff.lines[faces[2]], "the edge " + vertex(a) + "-" + vertex(b) + " belongs to " +
-                                      std::to_string(faces.size()) + " faces, " + name_faces(ff, faces) +
-                                      ": a non-manifold edge (at most two faces may share an edge)");
-  }
-  const auto* same = first_edge([&](const std::vector<std::size_t>& s) {
-    return s.size() == 2 && ff.corners[s[0]] == ff.corners[s[1]];
-  });
-  if (same) {
-    const std::size_t s = same->front();
-    const std::size_t g = face_of[same->back()];
-    return at(ff.lines[g], name_faces(ff, {face_of[s], g}) + " both run the edge " + vertex(ff.corners[s]) + "-" +
-                               vertex(ff.corners[next(s)]) + " from " + vertex(ff.corners[s]) + " to " +
-                               vertex(ff.corners[next(s)]) +
-                               ": their orientations disagree (faces that share an edge must run it in opposite "
-                               "directions)");
-  }
-
-  // Every edge now has one face, or two that run it in opposite directions. The corners of a vertex fall into
-  // fans joined across the edges at it; more than one fan is a non-manifold vertex.
-  std::vector<std::size_t> parent(ff.corners.size());
-  for (std::size_t s = 0; s < parent.size(); ++s) parent[s] = s;
-  auto find = [&parent](std::size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (const auto& [key, slots] : edges)
-    if (slots.size() == 2) {
-      // Face f runs a -> b from slot s, face g runs b -> a from slot t: the corners of a are s and next(t).
-      const std::size_t s = slots[0], t = slots[1];
-      parent[find(s)] = find(next(t));
-      parent[find(next(s))] = find(t);
-    }
-  std::vector<std::size_t> first_slot(num_vertices, SIZE_MAX), other_slot(num_vertices, SIZE_MAX);
-  for (std::size_t s = 0; s < ff.corners.size(); ++s) {
-    const Index v = ff.corners[s];
-    if (first_slot[v] == SIZE_MAX) first_slot[v] = s;
-    else if (other_slot[v] == SIZE_MAX && find(s) != find(first_slot[v])) other_slot[v] = s;
-  }
-  for (Index v = 0; v < num_vertices; ++v) {
-    if (other_slot[v] == SIZE_MAX) continue;
-    std::vector<std::size_t> roots;
-    for (std::size_t s = 0; s < ff.corners.size(); ++s)
-      if (ff.corners[s] == v) roots.push_back(find(s));
-    std::sort(roots.begin(), roots.end());
-    const std::size_t fans = static_cast<std::size_t>(std::unique(roots.begin(), roots.end()) - roots.begin());
-    const std::size_t v_line = v < ff.vertex_lines.size() ? ff.vertex_lines[v] : 0;
-    return at(v_line, "the faces at vertex " + vertex(v) + " form " + std::to_string(fans) +
-                          " fans that share no edge there, e.g. " +
-                          name_faces(ff, {face_of[first_slot[v]], face_of[other_slot[v]]}) +
-                          ": a non-manifold vertex (the faces around a vertex must form one fan)");
+  const std::vector<std::size_t> faces(p.faces.begin(), p.faces.end());
+  const Index a = p.vertices[0], b = p.vertices[1];
+  switch (p.rule) {
+    case TopologyRule::kNone: return {};
+    case TopologyRule::kRepeatedCorner:
+      return at(ff.lines[faces[0]],
+                name_faces(ff, faces) + " lists vertex " + vertex(a) + " twice: a face needs distinct corners");
+    case TopologyRule::kNonManifoldEdge:
+      return at(ff.lines[faces[2]], "the edge " + vertex(std::min(a, b)) + "-" + vertex(std::max(a, b)) + " belongs to " +
+                                        std::to_string(faces.size()) + " faces, " + name_faces(ff, faces) +
+                                        ": a non-manifold edge (at most two faces may share an edge)");
+    case TopologyRule::kInconsistentOrientation:
+      return at(ff.lines[faces[1]], name_faces(ff, faces) + " both run the edge " + vertex(a) + "-" + vertex(b) + " from " +
+                                        vertex(a) + " to " + vertex(b) +
+                                        ": their orientations disagree (faces that share an edge must run it in "
+                                        "opposite directions)");
+    case TopologyRule::kDoubledFace:
+      return at(ff.lines[faces[1]], name_faces(ff, faces) +
+                                        " have the same vertices: a doubled face (no two faces may lie on the same "
+                                        "vertices)");
+    case TopologyRule::kNonManifoldVertex:
+      return at(a < ff.vertex_lines.size() ? ff.vertex_lines[a] : 0,
+                "the faces at vertex " + vertex(a) + " form " + std::to_string(faces.size()) +
+                    " fans that share no edge there, e.g. " + name_faces(ff, faces) +
+                    ": a non-manifold vertex (the faces around a vertex must form one fan)");
   }
   return {};
+}
+
+std::string topology_problem(const FileFaces& ff, std::size_t* line, const TopologyRules& rules) {
+  return describe_topology_problem(ff, find_topology_problem(ff, rules), line);
 }
 
 }  // namespace varmesh::app

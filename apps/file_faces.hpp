@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "fourk/poly_mesh.hpp"
 #include "multitri/mesh_io.hpp"
 #include "multitri/tri_mesh.hpp"
 
@@ -40,12 +41,22 @@ std::optional<FileFaces> file_faces(const TriMesh& mesh, const ReadInfo& info);
 /// file_faces. For messages after a first read found a problem: the common read asks for no provenance.
 std::optional<FileFaces> read_file_faces(const std::string& path);
 
-/// The first reason, in the file's words, why `faces` do not make a manifold, consistently oriented polygon
-/// mesh (what PolyMesh::validate() requires): a face that repeats a vertex, an edge of more than two faces,
-/// two faces that run an edge in the same direction, or a vertex whose faces form more than one fan.
-/// Faces are named by their number in the file (from 1) and line (none when the line is 0: a binary PLY),
-/// vertices by the file's numbers. `line` receives the line the problem shows on (the face or vertex found
-/// last; 0 in a binary PLY); empty when there is no problem.
-std::string topology_problem(const FileFaces& faces, std::size_t* line = nullptr);
+/// find_topology_problem() (fourk/poly_mesh.hpp) over the file's faces: faces numbered from 0 in file order,
+/// vertices as read_mesh numbers them. `rules` are those of the code that refused the mesh: kPolyMeshRules
+/// (PolyMesh::validate()) or kFourKMeshRules (FourKMesh, simplify4k).
+TopologyProblem find_topology_problem(const FileFaces& faces, const TopologyRules& rules = kPolyMeshRules);
+
+/// `problem`, found by find_topology_problem(faces, ...), in the file's words: faces named by their number in
+/// the file (from 1) and line (none when the line is 0: a binary PLY), vertices by the file's numbers.
+/// `line` receives the line the problem shows on (the face found last, or the vertex's line; 0 in a binary
+/// PLY). Empty for no problem.
+std::string describe_topology_problem(const FileFaces& faces, const TopologyProblem& problem, std::size_t* line = nullptr);
+
+/// The first reason, in the file's words, why `faces` break `rules`: for kPolyMeshRules, why they do not make
+/// a manifold, consistently oriented polygon mesh (a face that repeats a vertex, an edge of more than two
+/// faces, two faces that run an edge in the same direction, a vertex whose faces form more than one fan).
+/// The two functions above in one; empty when there is no problem.
+std::string topology_problem(const FileFaces& faces, std::size_t* line = nullptr,
+                             const TopologyRules& rules = kPolyMeshRules);
 
 }  // namespace varmesh::app

@@ -19,6 +19,7 @@
 #include <glm/geometric.hpp>
 
 #include "apps/cli_util.hpp"
+#include "apps/file_faces.hpp"
 #include "apps/render.hpp"
 #include "fourk/adaptive.hpp"
 #include "fourk/semiregular.hpp"
@@ -423,6 +424,29 @@ void check_semiregular_size(const BuildArgs& a, std::size_t base_faces, int leve
   throw InvalidInput(text + " or raise --max-triangles (at most 2^31)");
 }
 
+// Rethrows the library's refusal `e` of the mesh read from `path` as an IoError naming the file. When the
+// refusal was one of the manifold rules (`rules`: those of the code that refused), the problem is said again
+// in the file's terms, as subdiv does (apps/file_faces.hpp): the library numbers the reader's triangles and
+// the vertices from 0, the user knows the file's faces, lines and vertex numbers. A topology problem that
+// shows only on the triangles the reader made of a polygon (a fan's diagonal on a third face) keeps the
+// library's words.
+[[noreturn]] void refuse_in_file_terms(const std::string& path, const TriMesh& mesh, const InvalidInput& e,
+                                       const TopologyRules& rules) {
+  bool topological = false;
+  try {
+    topological = bool(find_topology_problem(mesh, rules));
+  } catch (const InvalidInput&) {
+    // indices out of range: the refusal was base.validate()'s
+  }
+  if (topological)
+    if (const std::optional<FileFaces> faces = read_file_faces(path)) {
+      std::size_t line = 0;
+      const std::string problem = topology_problem(*faces, &line, rules);
+      if (!problem.empty()) throw IoError(path, problem, line);
+    }
+  throw IoError(path, e.what());
+}
+
 // Writes the hierarchy `a.output` and its pictures, all or nothing: the hierarchy goes to a temporary name
 // beside its target, the pictures to a staging folder inside `a.pictures` (StagedFolder), then the pictures
 // are moved into place and the hierarchy renamed last. A failure on the way leaves the output and the folder
@@ -503,7 +527,7 @@ int run_build(const BuildArgs& a) {
     try {
       mt = build_semiregular_mt(base, levels, {}, &info);
     } catch (const InvalidInput& e) {
-      throw IoError(a.input, e.what());  // name the file (e.g. "face 18 uses edge (7, 2) already shared ...")
+      refuse_in_file_terms(a.input, base, e, kFourKMeshRules);
     }
     // The faces left over by the matching are split 1 -> 2 on their own; said only when there are some.
     const std::string leftovers = info.matching.num_leftovers == 0
@@ -531,7 +555,7 @@ int run_build(const BuildArgs& a) {
       try {
         return simplify4k(input, so);
       } catch (const InvalidInput& e) {
-        throw IoError(a.input, e.what());
+        refuse_in_file_terms(a.input, input, e, kFourKMeshRules);  // simplify4k checks FourKMesh's rules itself
       }
     }();
     std::printf("simplify4k: %s, %s, %s; faces per level:", count_noun(r.num_levels(), "level").c_str(),

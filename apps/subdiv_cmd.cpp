@@ -224,10 +224,13 @@ Input load_input(const std::string& in) {
     // The library names a face of the quads rebuilt from the fans (or of the paired triangles) and vertices
     // from 0: "edge 0-1 of face 1" was the file's third face, on OBJ vertices 1 and 2. Said again in the
     // file's terms, from the provenance of a second read that asks for it (a polygon file; PLY triangle
-    // strips are none). The first read did not ask: most inputs are fine and need none of it.
+    // strips are none). The first read did not ask: most inputs are fine and need none of it. A triangle
+    // file was paired into quads first, which refuses faces on the same vertices too (FourKMesh's rules).
     if (const std::optional<FileFaces> faces = read_file_faces(in)) {
+      TopologyRules rules = kPolyMeshRules;
+      rules.distinct_faces = r.source == Input::Source::kTriangleFile;
       std::size_t line = 0;
-      const std::string problem = topology_problem(*faces, &line);
+      const std::string problem = topology_problem(*faces, &line, rules);
       if (!problem.empty()) throw IoError(in, problem, line);
     }
     throw;
@@ -573,10 +576,12 @@ int run_subdiv(const SubdivArgs& a) {
     const QueryStats st = extract(front, q);
     const double ms = watch.ms();
     out = front.to_mesh();
-    std::snprintf(line, sizeof line, "%s, %s, adaptive: %s built in %.1f ms; front %s, %s of %zu uniform (%s refined) in %.2f ms",
+    // "0 nodes refined" read as a failure; the front is then the base mesh, which met the criterion as it was.
+    const std::string refined = st.refined == 0 ? "no node needed refining" : count_noun(st.refined, "node") + " refined";
+    std::snprintf(line, sizeof line, "%s, %s, adaptive: %s built in %.1f ms; front %s, %s of %zu uniform (%s) in %.2f ms",
                   s.title, count_noun(std::uint64_t(steps), "binary step").c_str(), count_noun(mt.num_nodes(), "node").c_str(),
                   build_ms, count_noun(out.num_vertices(), "vertex").c_str(), count_noun(out.num_faces(), "triangle").c_str(),
-                  info.uniform_faces, count_noun(st.refined, "node").c_str(), ms);
+                  info.uniform_faces, refined.c_str(), ms);
   } else {
     Result r = run_uniform(base, s, steps, a.max_triangles, count_option(a), !a.png.empty());
     out = std::move(r.triangles);

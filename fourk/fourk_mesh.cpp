@@ -13,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "fourk/poly_mesh.hpp"
 #include "multitri/errors.hpp"
 
 namespace varmesh {
@@ -36,55 +37,19 @@ FourKMesh::FourKMesh(const TriMesh& base) {
   const std::size_t nf = base.num_faces();
   if (nf == 0) throw InvalidInput("FourKMesh: the base mesh has no face (empty mesh)");
   if (nf > kMaxFaces) throw InvalidInput("FourKMesh: too many faces for 32-bit half-edge ids");
-  for (std::size_t f = 0; f < nf; ++f) {
-    const Index a = base.corner(f, 0), b = base.corner(f, 1), c = base.corner(f, 2);
-    if (a == b || b == c || a == c)
-      throw InvalidInput("FourKMesh: face " + std::to_string(f) + " is degenerate (repeated corner)", f);
-  }
+  // The rules live in find_topology_problem (poly_mesh.hpp), so that the command line can say the same
+  // problem in a file's terms. Its opposite sides are the mates: half-edge 3f + k is its slot 3f + k.
+  std::vector<HalfEdgeId> opposite;
+  if (const TopologyProblem problem = find_topology_problem(base, kFourKMeshRules, &opposite))
+    throw InvalidInput("FourKMesh: " + describe_topology_problem(problem), problem.element());
   positions_ = base.positions;
   point_.assign(base.indices.begin(), base.indices.end());
-  mate_.assign(3 * nf, kInvalid);
+  mate_ = std::move(opposite);
   parent_.assign(nf, kInvalid);
   children_.assign(2 * nf, kInvalid);
   error_.assign(nf, 0.0f);
   num_base_faces_ = nf;
   num_current_ = nf;
-
-  // Mates: sort half-edges by undirected edge; a group of two opposite half-edges is an interior edge,
-  // one half-edge a border edge; two in the same direction or three or more are rejected.
-  std::vector<std::pair<std::uint64_t, HalfEdgeId>> by_edge(3 * nf);
-  for (HalfEdgeId h = 0; h < 3 * nf; ++h) {
-    const VertexId a = point(h), b = target(h);
-    by_edge[h] = {undirected_edge_key(a, b), h};
-  }
-  std::sort(by_edge.begin(), by_edge.end());
-  for (std::size_t i = 0; i < by_edge.size();) {
-    std::size_t j = i + 1;
-    while (j < by_edge.size() && by_edge[j].first == by_edge[i].first) ++j;
-    if (j - i >= 2) {
-      const HalfEdgeId h = by_edge[i].second, o = by_edge[i + 1].second;
-      const HalfEdgeId bad = j - i > 2 ? by_edge[i + 2].second : o;
-      if (j - i > 2 || point(h) == point(o))
-        throw InvalidInput("FourKMesh: face " + std::to_string(fbase(bad)) + " uses edge (" + std::to_string(point(bad)) +
-                               ", " + std::to_string(target(bad)) + ")" +
-                               (j - i > 2 ? " already shared by two faces (non-manifold edge)"
-                                          : " in the same direction as face " + std::to_string(fbase(h)) +
-                                                " (inconsistent orientation)"),
-                           fbase(bad));
-      mate_[h] = o;
-      mate_[o] = h;
-    }
-    i = j;
-  }
-  // Two faces on one vertex triple share all three edges (oppositely oriented, or the loop above fails).
-  for (FaceId f = 0; f < nf; ++f) {
-    const HalfEdgeId m0 = mate_[3 * f], m1 = mate_[3 * f + 1], m2 = mate_[3 * f + 2];
-    if (m0 != kInvalid && m1 != kInvalid && m2 != kInvalid && fbase(m0) == fbase(m1) && fbase(m0) == fbase(m2) &&
-        fbase(m0) < f)
-      throw InvalidInput("FourKMesh: face " + std::to_string(f) + " has the same three vertices as face " +
-                             std::to_string(fbase(m0)),
-                         f);
-  }
 }
 
 FourKFaceSet FourKMesh::pre_image(HalfEdgeId e) const {

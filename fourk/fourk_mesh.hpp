@@ -79,10 +79,11 @@ class FourKMesh {
  public:
   FourKMesh() = default;
   /// Takes `base` as K0 (face i = base face i, same corner order; vertex i = base vertex i). Throws
-  /// InvalidInput naming the element when base.validate() fails, the mesh has no face, a face repeats a
-  /// corner, two faces have the same three vertices, or a directed edge is used twice (a non-manifold
-  /// edge or inconsistent orientation). Non-manifold vertices, zero-area faces and unreferenced vertices
-  /// are accepted. O(F log F).
+  /// InvalidInput naming the element when base.validate() fails, the mesh has no face, or
+  /// find_topology_problem(base, kFourKMeshRules) (poly_mesh.hpp) finds a problem: a face repeats a corner,
+  /// an edge has three faces or two that run it in the same direction, two faces have the same three
+  /// vertices (the first problem in that function's order; the element is TopologyProblem::element()).
+  /// Non-manifold vertices, zero-area faces and unreferenced vertices are accepted. O(F log F).
   explicit FourKMesh(const TriMesh& base);
 
   std::size_t num_vertices() const noexcept { return positions_.size(); }

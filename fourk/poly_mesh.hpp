@@ -10,8 +10,14 @@
 /// edge of the two triangles: the quad's *diagonal* in the 4-8 sense (the edge a binary 4-8 step splits
 /// first). Native quads use the same convention, so a quad mesh is a 4-8 mesh whose triangles are
 /// (c0, c1, c2) and (c0, c2, c3).
+///
+/// find_topology_problem() holds the manifold rules: validate() and the FourKMesh constructor phrase its
+/// answer in the library's numbering, the command line in a mesh file's (apps/file_faces.hpp).
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -42,13 +48,92 @@ struct PolyMesh {
   void add_face(std::span<const Index> face_corners);
   bool all_quads() const noexcept;
 
-  /// Throws InvalidInput naming the first offending element: no face, offsets malformed, a face with
-  /// fewer than 3 corners or a repeated corner, a corner out of range, a non-finite position or one beyond
-  /// 1e300 in size (the schemes' sums would overflow), a directed
-  /// edge used twice (non-manifold edge or inconsistent orientation), a vertex whose faces form several
-  /// fans (non-manifold vertex). Unreferenced vertices are allowed.
+  /// Throws InvalidInput naming the first offending element, in this order: offsets malformed, no face, a
+  /// non-finite position or one beyond 1e300 in size (the schemes' sums would overflow), a face with fewer
+  /// than 3 corners or a corner out of range (the first such face), then the first problem
+  /// find_topology_problem(*this, kPolyMeshRules) finds (a repeated corner, a non-manifold edge, an
+  /// inconsistent orientation, a non-manifold vertex; its element is TopologyProblem::element()).
+  /// Unreferenced vertices are allowed. O(C log d) for C corners and largest vertex degree d.
   void validate() const;
 };
+
+/// The manifold rules, in the order find_topology_problem() checks them.
+enum class TopologyRule : std::uint8_t {
+  kNone,
+  kRepeatedCorner,           ///< a face lists one vertex twice
+  kNonManifoldEdge,          ///< three or more faces have one edge
+  kInconsistentOrientation,  ///< two faces run their shared edge in the same direction
+  kDoubledFace,              ///< two faces have the same set of corners (TopologyRules::distinct_faces)
+  kNonManifoldVertex,        ///< the faces around a vertex form several fans (TopologyRules::one_fan_per_vertex)
+};
+
+/// Which rules find_topology_problem() checks besides the first three, which it always checks.
+struct TopologyRules {
+  /// No two faces on the same vertices. The other rules allow (a, b, c) with (a, c, b), a closed surface of
+  /// two faces; a FourKMesh refuses it, as its hierarchy would hold one triangle twice (a redundant Mt).
+  bool distinct_faces = false;
+  /// One fan of faces around each vertex. A FourKMesh takes non-manifold vertices (its splits and swaps
+  /// only need the edges), the subdivision schemes do not.
+  bool one_fan_per_vertex = true;
+};
+/// The rules of PolyMesh::validate().
+inline constexpr TopologyRules kPolyMeshRules{};
+/// The rules of the FourKMesh constructor (and of simplify4k's input, which checks the same ones itself).
+inline constexpr TopologyRules kFourKMeshRules{.distinct_faces = true, .one_fan_per_vertex = false};
+
+/// The first manifold rule a polygon mesh breaks, as data: which rule, the faces and the vertices involved.
+/// Faces and vertices are numbered as in the mesh given to find_topology_problem().
+struct TopologyProblem {
+  TopologyRule rule = TopologyRule::kNone;
+  /// The faces involved, in increasing order. kRepeatedCorner: the face. kNonManifoldEdge: every face
+  /// that has the edge (3 or more). kInconsistentOrientation: the two faces. kDoubledFace: the earlier
+  /// face and the face that repeats its corners. kNonManifoldVertex: the first face of each fan around
+  /// the vertex, so faces.size() is the number of fans (2 or more).
+  std::vector<Index> faces;
+  /// kRepeatedCorner, kNonManifoldVertex: vertices[0] is the vertex. kNonManifoldEdge: the edge
+  /// vertices[0] -> vertices[1] as faces[0] runs it; kInconsistentOrientation: as both faces run it.
+  /// kInvalid where unused (kDoubledFace names no vertex).
+  std::array<Index, 2> vertices{kInvalid, kInvalid};
+
+  explicit operator bool() const noexcept { return rule != TopologyRule::kNone; }
+  /// The element an exception names: the face that shows the problem (the face of a repeated corner, the
+  /// third face of a non-manifold edge, the later of two faces) or the non-manifold vertex; kInvalid for
+  /// kNone.
+  Index element() const noexcept;
+};
+
+/// The first manifold rule broken by the polygon mesh of `face_offsets` and `corners` (PolyMesh's layout)
+/// over `num_vertices` vertices, kNone when there is none. The rules are checked one after the other, each
+/// over the whole mesh, so that the answer depends on the faces and their order only:
+/// 1. kRepeatedCorner: the first face that lists a vertex twice, with the vertex it repeats first;
+/// 2. the edges: at the first face that gives an edge a third face or runs it in the direction of an earlier
+///    face (at its first such side, in corner order), that edge, reported as kNonManifoldEdge when three or
+///    more faces of the whole mesh have it, else as kInconsistentOrientation;
+/// 3. kDoubledFace, if rules.distinct_faces: the first face whose set of corners an earlier face has, with
+///    the first such earlier face;
+/// 4. kNonManifoldVertex, if rules.one_fan_per_vertex: the vertex of the lowest number whose faces form
+///    more than one fan.
+/// Once 1 and 2 pass, every edge has one face, or two that run it in opposite directions. Unreferenced
+/// vertices are fine. Throws InvalidInput (naming the face when there is one) when the offsets do not start
+/// at 0, decrease or do not end at corners.size(), a face has fewer than 3 corners or a corner is
+/// num_vertices or more. `opposite` (optional) receives, once the edge rules pass (the answer is kNone,
+/// kDoubledFace or kNonManifoldVertex), the slot of the opposite side for each corner slot s (the side from
+/// corners[s] to the next corner of its face), kInvalid on the border; it is left alone otherwise. O(C log d)
+/// time for C corners and largest vertex degree d, O(C + V) memory for V vertices.
+TopologyProblem find_topology_problem(std::span<const Index> face_offsets, std::span<const Index> corners,
+                                      std::size_t num_vertices, const TopologyRules& rules = kPolyMeshRules,
+                                      std::vector<Index>* opposite = nullptr);
+/// The same for a PolyMesh (its positions are not looked at).
+TopologyProblem find_topology_problem(const PolyMesh& mesh, const TopologyRules& rules = kPolyMeshRules);
+/// The same for the triangles of a TriMesh (slot 3f + k is corner k of face f); throws also when it has
+/// 2^32 corners or more.
+TopologyProblem find_topology_problem(const TriMesh& mesh, const TopologyRules& rules,
+                                      std::vector<Index>* opposite = nullptr);
+
+/// The problem in the library's numbering (faces and vertices from 0), without a prefix: e.g. "face 2 uses
+/// the edge (0, 1) in the same direction as face 0 (inconsistent orientation)". Empty for kNone. `problem`
+/// is one find_topology_problem() returned (its faces are read unchecked).
+std::string describe_topology_problem(const TopologyProblem& problem);
 
 /// Number of edges and border edges of a (valid) PolyMesh.
 struct PolyEdgeCount {

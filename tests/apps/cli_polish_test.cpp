@@ -18,6 +18,7 @@
 #include "apps/cli_util.hpp"
 #include "apps/file_faces.hpp"
 #include "fourk/poly_mesh.hpp"
+#include "fourk/topology_oracle.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/mesh_io.hpp"
 #include "test_support.hpp"
@@ -251,6 +252,43 @@ TEST(CliSubdiv, NonManifoldPolygonFileIsNamedInTheFilesTerms) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// `build` on a mesh that breaks the 4-k hierarchy's rules (FourKMesh's, which simplify4k checks too): the
+// message names the file's faces from 1, their lines and the OBJ's vertex numbers, not the library's numbering
+// of the reader's triangles (a quad first makes the two differ: the library's faces 2 and 3 are the file's 2
+// and 3, but its face 0 is half of the file's face 1), and no hierarchy is written. A non-manifold vertex is
+// no error for these methods: the bow-tie builds.
+TEST(CliBuild, TopologyErrorsNameTheFilesFaces) {
+  const fs::path dir = testing::scratch_dir("polish_build_topology");
+  const std::string out = (dir / "out.vrm").string();
+  const std::string square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\n# faces\n";
+  write_text(dir / "fin.obj", square + "f 1 2 3 4\nf 2 1 5\nf 1 2 6\n");  // faces on lines 8, 9 and 10
+  write_text(dir / "flip.obj", square + "f 1 2 3 4\n\nf 2 3 5\n");        // lines 8 and 10
+  write_text(dir / "pillow.obj", square + "f 1 2 3 4\nf 2 5 6\nf 6 5 2\n");
+  write_text(dir / "bowtie.obj", square + "v -1 0 0\nv -1 -1 0\nf 1 2 3 4\nf 1 7 8\n");
+  struct Case {
+    std::string file, says;
+  };
+  const Case cases[] = {
+      {"fin.obj", "fin.obj:10: the edge 1-2 belongs to 3 faces, faces 1, 2 and 3 (lines 8, 9 and 10): a non-manifold edge"},
+      {"flip.obj", "flip.obj:10: faces 1 and 2 (lines 8 and 10) both run the edge 2-3 from 2 to 3: their orientations "
+                   "disagree"},
+      {"pillow.obj", "pillow.obj:10: faces 2 and 3 (lines 9 and 10) have the same vertices: a doubled face"},
+  };
+  for (const char* method : {"semiregular", "simplify4k"})
+    for (const Case& c : cases) {
+      const std::string args = "build --method " + std::string(method) + " " + (dir / c.file).string() + " -o " + out;
+      const CmdResult r = run(args, dir);
+      EXPECT_EQ(r.status, 1) << args;
+      EXPECT_EQ(count_lines(r.err), 1) << r.err;
+      EXPECT_TRUE(contains(r.err, c.says)) << args << "\n" << r.err;
+      EXPECT_FALSE(contains(r.err, "FourKMesh")) << r.err;
+      EXPECT_FALSE(fs::exists(out)) << args;
+    }
+  const CmdResult r = run("build --method semiregular " + (dir / "bowtie.obj").string() + " --levels 1 -o " + out, dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out));
+}
+
 // The reader's provenance read with the mesh.
 std::pair<TriMesh, ReadInfo> read_with_sources(const std::string& name, const std::string& text) {
   ReadInfo info;
@@ -312,8 +350,10 @@ TEST(FileFaces, FromTheReadersProvenance) {
 
 // A polygon file made by cutting and damaging a grid of quads and triangles (faces reversed, doubled,
 // fins added across edges, faces removed, a corner repeated, the order shuffled), written as OBJ and OFF with
-// comments, blank lines and mixed line ends. The provenance must give back the faces as written, and
-// topology_problem must find a problem exactly when PolyMesh::validate() refuses the same faces.
+// comments, blank lines and mixed line ends. The provenance must give back the faces as written; the problem
+// found in them must be the one a brute-force reading of the rules finds (tests/fourk/topology_oracle.hpp),
+// there exactly when PolyMesh::validate() refuses the same faces, and its words must name the file's faces,
+// vertices and line.
 TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
   std::mt19937 rng(93);
   auto pick = [&rng](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
@@ -337,7 +377,7 @@ TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
     const int damages = int(pick(3));
     for (int k = 0; k < damages; ++k) {
       std::vector<Index>& f = faces[pick(faces.size())];
-      switch (pick(5)) {
+      switch (pick(6)) {
         case 0: std::reverse(f.begin(), f.end()); break;
         case 1: faces.push_back(faces[pick(faces.size())]); break;
         case 2: {  // a fin: a new vertex and a triangle on an edge of f
@@ -350,6 +390,12 @@ TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
         case 3:
           if (faces.size() > 1) faces.erase(faces.begin() + std::ptrdiff_t(pick(faces.size())));
           break;
+        case 4: {  // glue two vertices: bow-ties, and sometimes worse
+          const Index from = Index(pick(positions.size())), to = Index(pick(positions.size()));
+          for (std::vector<Index>& g : faces)
+            std::replace(g.begin(), g.end(), from, to);
+          break;
+        }
         default: f[pick(f.size())] = f[pick(f.size())]; break;  // maybe a repeated corner
       }
     }
@@ -365,12 +411,14 @@ TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
     } catch (const InvalidInput&) {
       valid = false;
     }
+    const TopologyProblem expected = testing::slow_topology_problem(faces, kPolyMeshRules);
+    EXPECT_EQ(valid, !expected) << describe_topology_problem(expected);
 
     for (const bool as_obj : {true, false}) {
       const char* ends[] = {"\n", "\r\n", "\r"};
       std::string text;
       std::size_t line = 1;
-      std::vector<std::size_t> face_lines;
+      std::vector<std::size_t> face_lines, vertex_lines;
       auto put = [&](const std::string& s) {
         // An empty line's LF right after a lone CR would make the two one CRLF.
         const bool after_cr = !text.empty() && text.back() == '\r';
@@ -379,7 +427,10 @@ TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
       };
       if (as_obj) {
         put("# round " + std::to_string(round));
-        for (const glm::dvec3& q : positions) put("v " + std::to_string(q.x) + " " + std::to_string(q.y) + " " + std::to_string(q.z));
+        for (const glm::dvec3& q : positions) {
+          vertex_lines.push_back(line);
+          put("v " + std::to_string(q.x) + " " + std::to_string(q.y) + " " + std::to_string(q.z));
+        }
         for (const std::vector<Index>& f : faces) {
           if (pick(4) == 0) put("");
           std::string s = "f";
@@ -390,7 +441,10 @@ TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
       } else {
         put("OFF");
         put(std::to_string(positions.size()) + " " + std::to_string(faces.size()) + " 0");
-        for (const glm::dvec3& q : positions) put(std::to_string(q.x) + " " + std::to_string(q.y) + " " + std::to_string(q.z));
+        for (const glm::dvec3& q : positions) {
+          vertex_lines.push_back(line);
+          put(std::to_string(q.x) + " " + std::to_string(q.y) + " " + std::to_string(q.z));
+        }
         for (const std::vector<Index>& f : faces) {
           if (pick(4) == 0) put("# between faces");
           std::string s = std::to_string(f.size());
@@ -410,11 +464,44 @@ TEST(FileFaces, TopologyProblemAgreesWithPolyMeshValidate) {
                   faces[f]);
         EXPECT_EQ(ff->lines[f], face_lines[f]);
       }
+      // The data: the rule, faces and vertices the brute-force reading of the rules finds in the faces as
+      // written (file order, so face f is the file's face f + 1).
+      const TopologyProblem found = app::find_topology_problem(*ff);
+      EXPECT_TRUE(testing::same_problem(found, expected)) << describe_topology_problem(found) << "\n" << text;
+      // The words: the file's face numbers, lines and vertex numbers, and the line of the face that shows it.
       std::size_t at = 0;
       const std::string problem = app::topology_problem(*ff, &at);
       EXPECT_EQ(problem.empty(), valid) << problem << "\n" << text;
-      if (!problem.empty()) {
-        EXPECT_GT(at, 0u) << problem;
+      if (expected) {
+        const Index first_vertex = as_obj ? 1 : 0;
+        std::string named = expected.faces.size() == 1 ? "face " : "faces ";
+        for (std::size_t i = 0; i < expected.faces.size(); ++i)
+          named += (i == 0 ? "" : i + 1 == expected.faces.size() ? " and " : ", ") + std::to_string(expected.faces[i] + 1);
+        EXPECT_TRUE(contains(problem, named)) << named << " in " << problem;
+        const Index v0 = expected.vertices[0] + first_vertex, v1 = expected.vertices[1] + first_vertex;
+        std::size_t want_line = 0;
+        switch (expected.rule) {
+          case TopologyRule::kRepeatedCorner:
+            EXPECT_TRUE(contains(problem, "lists vertex " + std::to_string(v0) + " twice")) << problem;
+            want_line = face_lines[expected.faces[0]];
+            break;
+          case TopologyRule::kNonManifoldEdge:
+            EXPECT_TRUE(contains(problem, "the edge " + std::to_string(std::min(v0, v1)) + "-" +
+                                              std::to_string(std::max(v0, v1)) + " belongs to"))
+                << problem;
+            want_line = face_lines[expected.faces[2]];
+            break;
+          case TopologyRule::kInconsistentOrientation:
+            EXPECT_TRUE(contains(problem, "from " + std::to_string(v0) + " to " + std::to_string(v1))) << problem;
+            want_line = face_lines[expected.faces[1]];
+            break;
+          case TopologyRule::kNonManifoldVertex:
+            EXPECT_TRUE(contains(problem, "the faces at vertex " + std::to_string(v0) + " form")) << problem;
+            want_line = vertex_lines[expected.vertices[0]];
+            break;
+          default: ADD_FAILURE() << problem;
+        }
+        EXPECT_EQ(at, want_line) << problem;
       }
       (valid ? clean : problems) += 1;
     }

@@ -283,8 +283,9 @@ TEST(Cli, BuildRefusesOptionsThatDoNotApply) {
       {"build saddle --method adaptive -o " + vrm + " --levels 49", "--levels must be in 1..48"},
       {"build " + mesh + " -o " + vrm + " --levels 40", "would make 4.398e+12 faces in the finest mesh (4 x 2^40), more than --max-triangles 4194304"},
       {"build " + mesh + " -o " + vrm + " --levels 29 --max-triangles 2147483648", "would exceed 2^31 faces"},
-      {"build " + bad_mesh + " -o " + vrm, bad_mesh + ": FourKMesh: face 4"},
-      {"build " + bad_mesh + " --method simplify4k -o " + vrm, bad_mesh + ": simplify4k: face"},
+      // The fifth face of the file (0, 1, 4), on its last line, is the edge's third; OFF numbers vertices from 0.
+      {"build " + bad_mesh + " -o " + vrm, bad_mesh + ":12: the edge 0-1 belongs to 3 faces, faces 1, 2 and 5"},
+      {"build " + bad_mesh + " --method simplify4k -o " + vrm, bad_mesh + ":12: the edge 0-1 belongs to 3 faces, faces 1, 2 and 5"},
       {"terrain " + mesh + " --raw-size 3,3 --error 1 -o " + (dir / "t.obj").string(), "--raw-size is for a .raw or .f32"},
   };
   // 4 x 2^28 faces stay below 2^31 (and --max-triangles 2^31) but need ~280 GB: refused by the library's memory check, naming the file.

@@ -205,6 +205,25 @@ TEST(SubdivCli, AdaptiveFrontLiesBetweenTheBaseAndTheUniformMesh) {
   EXPECT_GT(view, 2 * torus.num_faces());
 }
 
+// The adaptive summary counts the nodes the front refined; when none needed it (the base met the criterion),
+// it says so rather than "0 nodes refined".
+TEST(SubdivCli, AdaptiveSummarySaysWhenNothingNeededRefining) {
+  const auto dir = testing::scratch_dir("subdiv_adaptive_summary");
+  const std::string out = (dir / "a.obj").string();
+  CmdResult r = run("torus --scheme 48 --steps 3 --adaptive --error 1000 -o " + out, dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("(no node needed refining)"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("0 nodes refined"), std::string::npos) << r.out;
+  EXPECT_EQ(read_mesh(out).num_faces(), 2 * make_quad_torus(16, 8).num_faces());  // the base, as the words say
+  r = run("torus --scheme 48 --steps 3 --adaptive --error 0 -o " + out, dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out.find("no node needed refining"), std::string::npos) << r.out;
+  const std::size_t at = r.out.find(" nodes refined)");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::size_t from = r.out.rfind('(', at);
+  EXPECT_GT(std::stoul(r.out.substr(from + 1, at - from - 1)), 0u) << r.out;
+}
+
 TEST(SubdivCli, BadInputFailsWithOneLineAndNoOutput) {
   const auto dir = testing::scratch_dir("subdiv_bad");
   // A bow-tie (two triangles sharing only a vertex: a non-manifold vertex) and three triangles on one edge.

@@ -1,11 +1,19 @@
-// Polygon meshes: triangulate() refuses input its TriMesh could not hold.
+// Polygon meshes: triangulate() refuses input its TriMesh could not hold; find_topology_problem() reports
+// the first broken manifold rule as its contract orders them (against a brute-force reading of it), and
+// PolyMesh::validate() and the FourKMesh constructor refuse exactly what it reports, naming its element.
 #include "fourk/poly_mesh.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <map>
+#include <random>
+#include <string>
 #include <vector>
 
+#include "fourk/fourk_mesh.hpp"
+#include "fourk/topology_oracle.hpp"
 #include "multitri/errors.hpp"
 
 namespace varmesh {
@@ -55,6 +63,207 @@ TEST(PolyMesh, TriangulateRefusesBadInputByName) {
   } catch (const InvalidInput& e) {
     EXPECT_EQ(e.element(), 3u);
   }
+}
+
+PolyMesh poly_of(const testing::FaceList& faces) {
+  PolyMesh p;
+  Index nv = 0;
+  for (const auto& f : faces) {
+    p.add_face(f);
+    for (Index c : f) nv = std::max(nv, c + 1);
+  }
+  p.positions.assign(nv + 1, glm::dvec3(0.0));  // one unreferenced vertex: allowed
+  return p;
+}
+
+TopologyProblem problem_of(const testing::FaceList& faces, const TopologyRules& rules = kPolyMeshRules) {
+  return find_topology_problem(poly_of(faces), rules);
+}
+
+// One small mesh per rule, with the data each must give, and the order between the rules and within them.
+TEST(TopologyProblem, EachRuleWithItsFacesAndVertices) {
+  // A square of two triangles, 0-1-2 and 0-2-3, is fine under both rule sets.
+  EXPECT_FALSE(problem_of({{0, 1, 2}, {0, 2, 3}}));
+  EXPECT_FALSE(problem_of({{0, 1, 2}, {0, 2, 3}}, kFourKMeshRules));
+
+  TopologyProblem p = problem_of({{0, 1, 2}, {3, 4, 5, 4}, {6, 7, 6}});
+  EXPECT_EQ(p.rule, TopologyRule::kRepeatedCorner);
+  EXPECT_EQ(p.faces, (std::vector<Index>{1}));
+  EXPECT_EQ(p.vertices[0], 4u);
+  EXPECT_EQ(p.element(), 1u);
+
+  // Face 1 runs 0 -> 1 like face 0; face 3 is a third face on 2-0 later on: the orientation shows first.
+  p = problem_of({{0, 1, 2}, {0, 1, 3}, {2, 0, 4}, {0, 2, 5}});
+  EXPECT_EQ(p.rule, TopologyRule::kInconsistentOrientation);
+  EXPECT_EQ(p.faces, (std::vector<Index>{0, 1}));
+  EXPECT_EQ(p.vertices, (std::array<Index, 2>{0, 1}));
+  EXPECT_EQ(p.element(), 1u);
+  // A repeated corner comes before any edge, wherever it is.
+  p = problem_of({{0, 1, 2}, {0, 1, 3}, {5, 6, 5}});
+  EXPECT_EQ(p.rule, TopologyRule::kRepeatedCorner);
+  EXPECT_EQ(p.faces, (std::vector<Index>{2}));
+
+  // Faces 0 and 2 run 1 -> 0 the same way, face 4 is the edge's third: all four faces of it are named and the
+  // edge is a non-manifold one, oriented as face 0 runs it; its element is its third face.
+  p = problem_of({{1, 0, 2}, {0, 1, 3}, {1, 0, 4}, {7, 8, 9}, {0, 1, 5}});
+  EXPECT_EQ(p.rule, TopologyRule::kNonManifoldEdge);
+  EXPECT_EQ(p.faces, (std::vector<Index>{0, 1, 2, 4}));
+  EXPECT_EQ(p.vertices, (std::array<Index, 2>{1, 0}));
+  EXPECT_EQ(p.element(), 2u);
+  // The edge named is the one whose problem shows first: 4-5's third face (face 3) before 0-1's (face 4).
+  p = problem_of({{0, 1, 2}, {1, 0, 3}, {4, 5, 6}, {5, 4, 7}, {4, 5, 8}, {0, 1, 9}});
+  EXPECT_EQ(p.rule, TopologyRule::kNonManifoldEdge);
+  EXPECT_EQ(p.faces, (std::vector<Index>{2, 3, 4}));
+  EXPECT_EQ(p.vertices, (std::array<Index, 2>{4, 5}));
+
+  // A closed pillow of two triangles: manifold, but a doubled face under FourKMesh's rules.
+  const testing::FaceList pillow = {{7, 8, 9}, {0, 1, 2}, {3, 4, 5}, {2, 1, 0}};
+  EXPECT_FALSE(problem_of(pillow));
+  p = problem_of(pillow, kFourKMeshRules);
+  EXPECT_EQ(p.rule, TopologyRule::kDoubledFace);
+  EXPECT_EQ(p.faces, (std::vector<Index>{1, 3}));
+  EXPECT_EQ(p.element(), 3u);
+
+  // Three triangles that meet only at vertex 3, and a bow-tie at vertex 1 after them: vertex 1 is the lowest.
+  const testing::FaceList fans = {{3, 4, 5}, {3, 6, 7}, {3, 8, 9}, {1, 10, 11}, {1, 12, 13}};
+  p = problem_of(fans);
+  EXPECT_EQ(p.rule, TopologyRule::kNonManifoldVertex);
+  EXPECT_EQ(p.vertices[0], 1u);
+  EXPECT_EQ(p.faces, (std::vector<Index>{3, 4}));
+  EXPECT_EQ(p.element(), 1u);
+  EXPECT_FALSE(problem_of(fans, kFourKMeshRules));
+  p = problem_of({{3, 4, 5}, {3, 6, 7}, {3, 8, 9}});
+  EXPECT_EQ(p.vertices[0], 3u);
+  EXPECT_EQ(p.faces, (std::vector<Index>{0, 1, 2}));  // one face per fan
+}
+
+// Malformed input is refused by name, not read past.
+TEST(TopologyProblem, RefusesMalformedInput) {
+  const std::vector<Index> corners = {0, 1, 2, 0, 2, 3};
+  EXPECT_NO_THROW(find_topology_problem(std::vector<Index>{0, 3, 6}, corners, 4));
+  EXPECT_THROW(find_topology_problem(std::vector<Index>{0, 3, 6}, corners, 3), InvalidInput);  // corner 3
+  EXPECT_THROW(find_topology_problem(std::vector<Index>{0, 3, 5}, corners, 4), InvalidInput);  // end != size
+  EXPECT_THROW(find_topology_problem(std::vector<Index>{0, 100, 6}, corners, 4), InvalidInput);
+  EXPECT_THROW(find_topology_problem(std::vector<Index>{0, 2, 6}, corners, 4), InvalidInput);  // 2 corners
+  EXPECT_THROW(find_topology_problem(std::vector<Index>{}, corners, 4), InvalidInput);
+  try {
+    find_topology_problem(std::vector<Index>{0, 3, 6}, std::vector<Index>{0, 1, 2, 0, 2, 7}, 4);
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.element(), 1u);
+  }
+}
+
+// Grids of quads and triangles damaged at random (faces reversed, doubled as they are or reversed, fins on
+// edges, faces dropped, corners repeated, vertices glued, the order shuffled): the fast search agrees with
+// the brute-force reading of its contract under both rule sets, PolyMesh::validate() refuses exactly what
+// it reports with its element, and so does the FourKMesh constructor on the all-triangle meshes.
+TEST(TopologyProblem, AgreesWithBruteForceOnDamagedGrids) {
+  std::mt19937 rng(4711);
+  auto pick = [&rng](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  std::map<TopologyRule, int> seen_poly, seen_fourk;
+  int fourk_meshes = 0;
+  for (int round = 0; round < 1500; ++round) {
+    const std::size_t w = 1 + pick(4), h = 1 + pick(3);
+    const bool triangles_only = pick(2) == 0;
+    Index nv = Index((w + 1) * (h + 1));
+    testing::FaceList faces;
+    for (std::size_t y = 0; y < h; ++y)
+      for (std::size_t x = 0; x < w; ++x) {
+        const Index a = Index(y * (w + 1) + x), b = a + 1, c = b + Index(w + 1), d = a + Index(w + 1);
+        if (triangles_only || pick(3) == 0) {
+          faces.push_back({a, b, c});
+          faces.push_back({a, c, d});
+        } else {
+          faces.push_back({a, b, c, d});
+        }
+      }
+    const std::size_t damages = pick(4);
+    for (std::size_t k = 0; k < damages; ++k) {
+      std::vector<Index>& f = faces[pick(faces.size())];
+      switch (pick(8)) {
+        case 0: std::reverse(f.begin(), f.end()); break;
+        case 1: {
+          std::vector<Index> copy = faces[pick(faces.size())];
+          if (pick(2) == 0) std::reverse(copy.begin(), copy.end());
+          faces.push_back(copy);
+          break;
+        }
+        case 2: {
+          const std::size_t i = pick(f.size());
+          faces.push_back({f[(i + 1) % f.size()], f[i], nv++});
+          break;
+        }
+        case 3:
+          if (faces.size() > 1) faces.erase(faces.begin() + std::ptrdiff_t(pick(faces.size())));
+          break;
+        case 4:
+          if (!triangles_only) f[pick(f.size())] = f[pick(f.size())];
+          break;
+        case 5: {  // glue two vertices: bow-ties, and sometimes worse
+          const Index from = Index(pick(nv)), to = Index(pick(nv));
+          for (auto& g : faces)
+            for (Index& c : g)
+              if (c == from) c = to;
+          break;
+        }
+        case 6: {  // a lone triangle touching the grid at one corner
+          faces.push_back({f[0], nv, nv + 1});
+          nv += 2;
+          break;
+        }
+        default: {  // a pillow: a triangle and its reverse, on one grid corner or apart
+          const Index a = pick(2) == 0 ? f[0] : nv++;
+          faces.push_back({a, nv, nv + 1});
+          faces.push_back({nv + 1, nv, a});
+          nv += 2;
+          break;
+        }
+      }
+    }
+    // Gluing can leave a triangle with a repeated corner in a triangles-only mesh: that is a case too.
+    std::shuffle(faces.begin(), faces.end(), rng);
+    for (auto& f : faces) std::rotate(f.begin(), f.begin() + std::ptrdiff_t(pick(f.size())), f.end());
+
+    const PolyMesh p = poly_of(faces);
+    for (const TopologyRules& rules : {kPolyMeshRules, kFourKMeshRules}) {
+      const TopologyProblem fast = find_topology_problem(p, rules);
+      const TopologyProblem slow = testing::slow_topology_problem(faces, rules);
+      ASSERT_TRUE(testing::same_problem(fast, slow))
+          << "round " << round << ": " << describe_topology_problem(fast) << " / " << describe_topology_problem(slow);
+      ++(rules.one_fan_per_vertex ? seen_poly : seen_fourk)[fast.rule];
+    }
+    const TopologyProblem expected = testing::slow_topology_problem(faces, kPolyMeshRules);
+    try {
+      p.validate();
+      EXPECT_FALSE(expected) << "round " << round;
+    } catch (const InvalidInput& e) {
+      ASSERT_TRUE(expected) << "round " << round << ": " << e.what();
+      EXPECT_EQ(e.element(), expected.element()) << e.what();
+    }
+    if (!triangles_only) continue;
+    ++fourk_meshes;
+    TriMesh t;
+    t.positions.assign(p.num_vertices(), glm::vec3(0.0f));
+    for (const auto& f : faces) t.indices.insert(t.indices.end(), f.begin(), f.end());
+    const TopologyProblem fourk = testing::slow_topology_problem(faces, kFourKMeshRules);
+    try {
+      const FourKMesh m(t);
+      EXPECT_FALSE(fourk) << "round " << round;
+      EXPECT_NO_THROW(m.validate());
+    } catch (const InvalidInput& e) {
+      ASSERT_TRUE(fourk) << "round " << round << ": " << e.what();
+      EXPECT_EQ(e.element(), fourk.element()) << e.what();
+    }
+  }
+  // Every rule came up often enough to mean something.
+  for (TopologyRule r : {TopologyRule::kNone, TopologyRule::kRepeatedCorner, TopologyRule::kNonManifoldEdge,
+                         TopologyRule::kInconsistentOrientation, TopologyRule::kNonManifoldVertex})
+    EXPECT_GT(seen_poly[r], 40) << int(r);
+  for (TopologyRule r : {TopologyRule::kNone, TopologyRule::kNonManifoldEdge, TopologyRule::kInconsistentOrientation,
+                         TopologyRule::kDoubledFace})
+    EXPECT_GT(seen_fourk[r], 20) << int(r);
+  EXPECT_GT(fourk_meshes, 500);
 }
 
 }  // namespace
