@@ -599,6 +599,14 @@ void print_distance(const char* what, const SurfaceDistance& d, const char* from
   std::printf("%s: distance from the %zu %s vertices: RMS %.6g, max %.6g (%.2f / %.2f e-4 of the bounding-box "
               "diagonal %.6g)\n", what, d.points, from, d.rms, d.max, d.rms * rel, d.max * rel, d.diagonal);
 }
+
+// A triangle budget below the coarsest mesh cannot be met: the query returns that mesh, which the summary
+// line ("0 nodes refined, budget reached") leaves the user to work out.
+void note_budget_below_base(std::size_t budget, std::size_t faces) {
+  if (budget == 0 || faces <= budget) return;
+  std::fprintf(stderr, "note: --budget %zu is below the base mesh's %s: nothing is coarser, so the result is the base mesh\n",
+               budget, count_noun(faces, "triangle").c_str());
+}
 }  // namespace
 
 int run_query(const QueryArgs& a) {
@@ -645,6 +653,7 @@ int run_query(const QueryArgs& a) {
   std::printf("front: %s, %s (%s refined%s) in %.2f ms -> %s\n", count_noun(mesh.num_faces(), "triangle").c_str(),
               count_noun(mesh.num_vertices(), "vertex").c_str(), count_noun(st.refined, "node").c_str(),
               st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  note_budget_below_base(a.budget, mesh.num_faces());
   if (distance) print_distance("result", *distance, "finest mesh");
   return 0;
 }
@@ -820,6 +829,7 @@ int run_pm_query(const PmQueryArgs& a) {
               count_noun(mesh.num_vertices(), "vertex").c_str(), count_noun(mesh.num_faces(), "triangle").c_str(),
               count_noun(s.vsplits, "vsplit").c_str(), s.forced_vsplits, count_noun(s.ecols, "ecol").c_str(), s.forced_ecols,
               s.degenerate_cases, st.budget_reached ? ", budget reached" : "", ms, a.output.c_str());
+  note_budget_below_base(a.budget, mesh.num_faces());
   if (distance) print_distance("result", *distance, "input");
   return 0;
 }

@@ -18,6 +18,7 @@
 #include "multitri/image.hpp"
 #include "multitri/mesh_distance.hpp"
 #include "multitri/mesh_io.hpp"
+#include "multitri/mt_io.hpp"
 #include "multitri/terrain_gen.hpp"
 #include "apps/cli_support.hpp"
 #include "test_support.hpp"
@@ -193,6 +194,14 @@ TEST(Cli, BudgetAloneReachesTheFinestMesh) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_LE(read_mesh(out).num_faces(), 100u);
   EXPECT_GT(read_mesh(out).num_faces(), 90u) << r.out;
+  EXPECT_FALSE(testing::contains(r.err, "below the base mesh")) << r.err;
+  // Below the coarsest front: that front (the simplified grid's base), and a note naming its size.
+  r = run("query " + vrm + " --budget 1 -o " + out, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::size_t base = read_mesh(out).num_faces();
+  const Mt mt = read_mt(vrm);
+  EXPECT_EQ(base, mt.image_size(Mt::source()));
+  EXPECT_TRUE(testing::contains(r.err, "--budget 1 is below the base mesh's " + std::to_string(base) + " triangles")) << r.err;
 }
 
 // A --ramp between points far apart: the float squared length overflowed, t became NaN and every node was

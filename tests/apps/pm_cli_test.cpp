@@ -170,6 +170,14 @@ TEST(PmCli, QueryRefinesUnderEachScheme) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_LE(read_mesh(small.string()).num_faces(), 150u);
   EXPECT_TRUE(contains(r.out, "budget reached")) << r.out;
+  EXPECT_FALSE(contains(r.err, "below the base mesh")) << r.err;
+  // A budget below the base mesh: the base mesh, and a note that says so with its size.
+  const std::size_t base_faces = read_vertex_hierarchy(b.vmh.string()).base_faces().size();
+  ASSERT_GT(base_faces, 1u);
+  r = run("pm query " + b.vmh.string() + " --budget 1 -o " + small.string(), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_mesh(small.string()).num_faces(), base_faces);
+  EXPECT_TRUE(contains(r.err, "--budget 1 is below the base mesh's " + std::to_string(base_faces) + " triangles")) << r.err;
   // Under a view, Kim-Lee refines no more than Hoppe-97, which refines no more than Xia-Varshney (Table 2).
   std::vector<std::size_t> vertices;
   for (const std::string scheme : {"kim-lee", "hoppe97", "xia-varshney"}) {
