@@ -29,6 +29,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "fourk/poly_mesh.hpp"
 #include "multitri/errors.hpp"
 
 namespace varmesh {
@@ -688,39 +689,20 @@ class ImplicitRefiner final : public Refiner {
   double side_;
 };
 
-// Faces across each edge k (corners k, k + 1) of a validated base mesh; kInvalid on the border. Throws on
-// degenerate faces and on edges used twice in one direction.
-std::vector<std::array<FaceId, 3>> face_neighbours(const TriMesh& mesh, const std::string& who) {
-  const std::size_t nf = mesh.num_faces();
-  std::unordered_map<std::uint64_t, FaceId> owner;
-  owner.reserve(3 * nf);
-  for (std::size_t f = 0; f < nf; ++f) {
-    const Index a = mesh.corner(f, 0), b = mesh.corner(f, 1), c = mesh.corner(f, 2);
-    if (a == b || b == c || a == c)
-      throw InvalidInput(who + ": base face " + std::to_string(f) + " is degenerate (repeated corner)", f);
-    for (int k = 0; k < 3; ++k) {
-      const VertexId p = mesh.corner(f, k), q = mesh.corner(f, (k + 1) % 3);
-      const auto [it, inserted] = owner.try_emplace(directed_edge_key(p, q), static_cast<FaceId>(f));
-      if (!inserted)
-        throw InvalidInput(who + ": base face " + std::to_string(f) + " uses edge (" + std::to_string(p) + ", " +
-                               std::to_string(q) + ") in the same direction as face " + std::to_string(it->second) +
-                               " (non-manifold edge or inconsistent orientation)",
-                           f);
+// Faces across each edge k (corners k, k + 1) of a validated base mesh; kInvalid on the border. Throws,
+// naming TopologyProblem::element(), when the mesh breaks a FourKMesh's manifold rules (a repeated corner, an
+// edge used twice in one direction, two faces on one vertex triple: a closed "pillow" shares all three edges,
+// and its first split would make an edge of three faces). `what` names the mesh ("base mesh", "polygonization").
+std::vector<std::array<FaceId, 3>> face_neighbours(const TriMesh& mesh, const std::string& who, const char* what) {
+  std::vector<Index> opposite;
+  if (const TopologyProblem problem = find_topology_problem(mesh, kFourKMeshRules, &opposite))
+    throw InvalidInput(who + ": " + what + ": " + describe_topology_problem(problem), problem.element());
+  std::vector<std::array<FaceId, 3>> nbr(mesh.num_faces());
+  for (std::size_t f = 0; f < nbr.size(); ++f)
+    for (std::size_t k = 0; k < 3; ++k) {
+      const Index o = opposite[3 * f + k];
+      nbr[f][k] = o == kInvalid ? kInvalid : o / 3;
     }
-  }
-  std::vector<std::array<FaceId, 3>> nbr(nf);
-  for (std::size_t f = 0; f < nf; ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const auto it = owner.find(directed_edge_key(mesh.corner(f, (k + 1) % 3), mesh.corner(f, k)));
-      nbr[f][k] = it == owner.end() ? kInvalid : it->second;
-    }
-    // Two faces on one vertex triple (a closed "pillow") share all three edges: their first split would make
-    // an edge of three faces.
-    if (nbr[f][0] != kInvalid && nbr[f][0] == nbr[f][1] && nbr[f][1] == nbr[f][2])
-      throw InvalidInput(who + ": base face " + std::to_string(f) + " has the same three vertices as face " +
-                             std::to_string(nbr[f][0]),
-                         f);
-  }
   return nbr;
 }
 
@@ -996,7 +978,7 @@ AdaptiveHierarchy implicit_from_base(const ImplicitSurface& surface, const TriMe
   check_implicit(surface, who);
   base.validate();
   if (base.num_faces() == 0) throw InvalidInput(who + ": the base mesh has no face");
-  const auto nbr = face_neighbours(base, who);
+  const auto nbr = face_neighbours(base, who, "base mesh");
   const double scale = glm::length(surface.box_hi - surface.box_lo);
   const ImplicitField field(surface, scale, who);
   TriMesh placed = base;
@@ -1372,10 +1354,10 @@ TriMesh polygonize_freudenthal(const ImplicitSurface& surface) {
     if (changed) continue;
     if (!undo.empty()) break;  // a defect no snap of its own vertices caused
     if (topology(snap.mesh) != topology(plain.mesh)) break;
-    face_neighbours(snap.mesh, who);  // manifold and consistently oriented, or a named error
+    face_neighbours(snap.mesh, who, "polygonization");  // manifold and consistently oriented, or a named error
     return std::move(snap.mesh);
   }
-  face_neighbours(plain.mesh, who);
+  face_neighbours(plain.mesh, who, "polygonization");
   return std::move(plain.mesh);
 }
 

@@ -210,10 +210,11 @@ AdaptiveHierarchy build_adaptive_cylindrical(const CylindricalScan& scan, const 
 /// or weld roots with opposite normals is not made, and if the topology would change no vertex is snapped.
 /// Degenerate faces (from welded grid vertices) are dropped.
 /// Throws InvalidInput: missing value; box not finite or box_lo >= box_hi; cells outside [1, 256] or more
-/// than 2^21 cells in all; f not finite at a grid vertex (named by (i, j, k) and its point); the result not
-/// an edge-manifold consistently oriented mesh (named by the edge). Cost: O(cells) evaluations of f plus 64
-/// per root and a gradient per root around each grid vertex near a root; the tetrahedra are marched 1 to 9
-/// times (once without snaps, then until no snap is undone).
+/// than 2^21 cells in all; f not finite at a grid vertex (named by (i, j, k) and its point); the result
+/// breaking a FourKMesh's manifold rules (find_topology_problem(result, kFourKMeshRules), poly_mesh.hpp;
+/// named by its face). Cost: O(cells) evaluations of f plus 64 per root and a gradient per root around each
+/// grid vertex near a root; the tetrahedra are marched 1 to 9 times (once without snaps, then until no snap
+/// is undone).
 TriMesh polygonize_freudenthal(const ImplicitSurface& surface);
 
 /// Adaptive refinement of an implicit surface from polygonize_freudenthal(surface), or from the polygonization
@@ -230,8 +231,9 @@ AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const 
 /// As above from a caller's base mesh (e.g. a coarse sphere), used as given (no grid to refine): its vertices
 /// are projected onto the surface first, and its marking comes from the matching. The base may face either
 /// way: the fold guard compares normals with the side most of its area faces. Throws InvalidInput also when
-/// base.validate() fails, the base is empty, has a degenerate face (repeated corner), an edge used twice in one
-/// direction (non-manifold or inconsistently oriented; named by face), or a vertex that cannot be projected.
+/// base.validate() fails, the base is empty, breaks a FourKMesh's manifold rules (a degenerate face, an edge
+/// used twice in one direction, two faces on one vertex triple: find_topology_problem(base, kFourKMeshRules),
+/// poly_mesh.hpp, named by its TopologyProblem::element()), or has a vertex that cannot be projected.
 AdaptiveHierarchy build_adaptive_implicit(const ImplicitSurface& surface, const TriMesh& base,
                                           const AdaptiveOptions& options);
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "fourk/poly_mesh.hpp"
 #include "multitri/errors.hpp"
 
 namespace varmesh {
@@ -38,40 +39,30 @@ void check_input(const TriMesh& base, std::span<const std::uint8_t> refinement_e
   if (levels > 30 || (std::uint64_t(nf) << levels) >= (std::uint64_t(1) << 31))
     throw InvalidInput("build_bisection_mt: " + std::to_string(nf) + " faces * 2^" + std::to_string(levels) +
                        " exceeds 2^31 faces");
-  for (std::size_t f = 0; f < nf; ++f) {
+  for (std::size_t f = 0; f < nf; ++f)
     if (refinement_edge[f] > 2)
       throw InvalidInput("build_bisection_mt: face " + std::to_string(f) + ": refinement edge " +
                              std::to_string(refinement_edge[f]) + " is not 0, 1 or 2",
                          f);
-    const Index a = base.corner(f, 0), b = base.corner(f, 1), c = base.corner(f, 2);
-    if (a == b || b == c || a == c)
-      throw InvalidInput("build_bisection_mt: face " + std::to_string(f) + " is degenerate (repeated corner)", f);
-  }
-  std::unordered_map<std::uint64_t, FaceId> owner;  // directed edge -> face
-  owner.reserve(3 * nf);
-  for (std::size_t f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const VertexId a = base.corner(f, k), b = base.corner(f, (k + 1) % 3);
-      const auto [it, inserted] = owner.try_emplace(directed_edge_key(a, b), static_cast<FaceId>(f));
-      if (!inserted)
-        throw InvalidInput("build_bisection_mt: face " + std::to_string(f) + " uses edge " + edge_name(a, b) +
-                               " in the same direction as face " + std::to_string(it->second) +
-                               " (non-manifold edge or inconsistent orientation)",
-                           f);
-    }
+  // The base's rules are a FourKMesh's: the bisection hierarchy is a 4-k one. The opposite sides found on the
+  // way give each marked edge's twin.
+  std::vector<Index> opposite;
+  if (const TopologyProblem problem = find_topology_problem(base, kFourKMeshRules, &opposite))
+    throw InvalidInput("build_bisection_mt: " + describe_topology_problem(problem), problem.element());
   for (std::size_t f = 0; f < nf; ++f) {
     const int k = refinement_edge[f];
+    const Index twin = opposite[3 * f + static_cast<std::size_t>(k)];
+    if (twin == kInvalid) continue;  // border edge: a 1 -> 2 split
     const VertexId a = base.corner(f, k), b = base.corner(f, (k + 1) % 3);
-    const auto twin = owner.find(directed_edge_key(b, a));
-    if (twin == owner.end()) continue;  // border edge: a 1 -> 2 split
-    const FaceId g = twin->second;
+    const FaceId g = twin / 3;
     const int kg = refinement_edge[g];
-    const VertexId ga = base.corner(g, kg), gb = base.corner(g, (kg + 1) % 3);
-    if (ga != b || gb != a)
+    if (twin % 3 != static_cast<Index>(kg)) {
+      const VertexId ga = base.corner(g, kg), gb = base.corner(g, (kg + 1) % 3);
       throw InvalidInput("build_bisection_mt: face " + std::to_string(f) + " marks edge " + edge_name(a, b) +
                              ", shared with face " + std::to_string(g) + " which marks edge " + edge_name(ga, gb) +
                              " (incompatible marking)",
                          f);
+    }
   }
 }
 

@@ -59,11 +59,12 @@ struct BisectionInfo {
 /// Bisects `base` uniformly `levels` times (see the header comment) and returns the Mt.
 ///
 /// Preconditions, checked (throws InvalidInput naming the face or vertex): base.validate() passes;
-/// refinement_edge has one entry per face, each < 3; no degenerate face (a repeated corner); every edge is
-/// used at most once in each direction (so edges are manifold and orientations consistent; non-manifold
-/// vertices are accepted); the marking is compatible (the error names the face whose marked edge is
-/// shared with a face marking another edge); 0 <= levels and |base| * 2^levels < 2^31. MtBuilder::build then
-/// re-checks the MT definition (it also rejects a base that has two faces on one vertex triple).
+/// 0 <= levels and |base| * 2^levels < 2^31; refinement_edge has one entry per face, each < 3; the manifold
+/// rules of a FourKMesh base, find_topology_problem(base, kFourKMeshRules) (poly_mesh.hpp; names its
+/// TopologyProblem::element()): no degenerate face (a repeated corner), every edge used at most once in each
+/// direction (so edges are manifold and orientations consistent; non-manifold vertices are accepted), no two
+/// faces on one vertex triple; the marking is compatible (the error names the face whose marked edge is
+/// shared with a face marking another edge). MtBuilder::build then re-checks the MT definition.
 /// Cost: O(|base| 2^levels) time and memory.
 Mt build_bisection_mt(const TriMesh& base, std::span<const std::uint8_t> refinement_edge, int levels,
                       const BisectionOptions& options = {}, BisectionInfo* info = nullptr);

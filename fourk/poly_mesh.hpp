@@ -78,7 +78,8 @@ struct TopologyRules {
 };
 /// The rules of PolyMesh::validate().
 inline constexpr TopologyRules kPolyMeshRules{};
-/// The rules of the FourKMesh constructor (and of simplify4k's input, which checks the same ones itself).
+/// The rules of the FourKMesh constructor, and of the bases of simplify4k(), build_bisection_mt() and
+/// build_adaptive_implicit().
 inline constexpr TopologyRules kFourKMeshRules{.distinct_faces = true, .one_fan_per_vertex = false};
 
 /// The first manifold rule a polygon mesh breaks, as data: which rule, the faces and the vertices involved.

@@ -31,6 +31,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "fourk/poly_mesh.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/mesh_distance.hpp"
 
@@ -309,24 +310,29 @@ void Simplifier::load_input() {
   blocked_.assign(nv, 0);
   touch_.assign(nv, 0);
   std::vector<Index> incident(nv, 0);
+  // The half-edge map and the vertex triples serve the simplification; a repeated corner, directed edge or
+  // triple met while they fill means a broken manifold rule of a FourKMesh (kFourKMeshRules), and none means
+  // none. Which rule and which face to name is find_topology_problem's to say: it checks each rule over the
+  // whole mesh, in the order the FourKMesh constructor reports them. It is asked only then: on every mesh it
+  // would add its sort of the sides to the maps built here anyway (0.1 to 0.17 s on 2M triangles, where
+  // loading them takes 3 s).
+  auto refuse = [this] {
+    const TopologyProblem problem = find_topology_problem(in_, kFourKMeshRules);
+    if (!problem)
+      throw std::logic_error("simplify4k: the half-edge map saw a broken rule find_topology_problem does not");
+    throw InvalidInput("simplify4k: " + describe_topology_problem(problem), problem.element());
+  };
   for (std::size_t f = 0; f < nf; ++f) {
     const VertexId a = fv_[3 * f], b = fv_[3 * f + 1], c = fv_[3 * f + 2];
-    if (a == b || b == c || a == c)
-      throw InvalidInput("simplify4k: face " + std::to_string(f) + " is degenerate (repeated corner)", f);
+    if (a == b || b == c || a == c) refuse();
     for (int k = 0; k < 3; ++k) {
       const VertexId p = fv_[3 * f + k], q = fv_[3 * f + (k + 1) % 3];
-      const auto [it, inserted] = he_.try_emplace(dkey(p, q), static_cast<FaceId>(f));
-      if (!inserted)
-        throw InvalidInput("simplify4k: face " + std::to_string(f) + " uses edge (" + std::to_string(p) + ", " +
-                               std::to_string(q) + ") in the same direction as face " + std::to_string(it->second) +
-                               " (non-manifold edge or inconsistent orientation)",
-                           f);
+      if (!he_.try_emplace(dkey(p, q), static_cast<FaceId>(f)).second) refuse();
       directed_.insert(dkey(p, q));
       ++incident[p];
       vface_[p] = static_cast<FaceId>(f);
     }
-    if (!triples_.insert(triple(a, b, c)).second)
-      throw InvalidInput("simplify4k: face " + std::to_string(f) + " has the same three vertices as an earlier face", f);
+    if (!triples_.insert(triple(a, b, c)).second) refuse();
   }
   // A vertex whose faces form several fans is non-manifold: classify it and lock it.
   vstate_.assign(nv, kUnused);

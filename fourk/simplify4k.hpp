@@ -120,10 +120,11 @@ struct Simplify4kResult {
 /// Simplifies `mesh` by four-face clusters (see the file comment) and returns the hierarchy.
 ///
 /// Preconditions, checked (throws InvalidInput naming the element): mesh.validate() passes (indices in
-/// range, finite positions); at least one face ("empty mesh"); fewer than 2^31 faces and vertices; no
-/// degenerate face (a repeated corner; names the face); no directed edge used by two faces (a non-manifold
-/// edge or inconsistent orientation; names the second face); no two faces on one vertex triple (names the
-/// second face); options in range. Non-manifold vertices are locked, unreferenced vertices ignored;
+/// range, finite positions); at least one face ("empty mesh"); fewer than 2^31 faces and vertices; the
+/// manifold rules of a FourKMesh, find_topology_problem(mesh, kFourKMeshRules) (poly_mesh.hpp; the first
+/// problem it finds, named by its TopologyProblem::element() in its words): no degenerate face (a repeated
+/// corner), no directed edge used by two faces (a non-manifold edge or inconsistent orientation), no two
+/// faces on one vertex triple; options in range. Non-manifold vertices are locked, unreferenced vertices ignored;
 /// faces of zero area are accepted (steps never create one).
 /// Cost: about O(F log F + L * V * p) time for F faces, V vertices and L levels, with p the cost of one plan
 /// search (every ear order: up to a few hundred steps at degree 7); O(F) memory. The cow (5,804 faces) takes

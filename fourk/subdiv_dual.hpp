@@ -79,13 +79,15 @@ const char* to_string(DualScheme scheme) noexcept;
 inline constexpr std::uint64_t kMaxDualCorners = std::uint64_t{1} << 31;
 
 /// One Zwart-Powell (mid-edge) step (rules, borders and numbering above). `in` must satisfy
-/// PolyMesh::validate(): the step checks the same conditions while it builds its edge table and throws
-/// InvalidInput naming the offending face, edge or vertex. Throws InvalidInput when the output would have
-/// more than kMaxDualCorners corners. Cost: linear in the number of corners; one hash table of edges.
+/// PolyMesh::validate(): the step checks the same conditions while it finds the edges and throws the
+/// InvalidInput validate() would throw, with the same element and the same words after "zwart_powell_step: "
+/// (validate's "polygon mesh: "), a manifold rule as find_topology_problem(in, kPolyMeshRules) reports it.
+/// Throws InvalidInput when the output would have more than kMaxDualCorners corners. Cost: linear in the
+/// number of corners, but for find_topology_problem's sort of the sides around each vertex.
 PolyMesh zwart_powell_step(const PolyMesh& in);
 
 /// One Doo-Sabin step (classic weights; rules, borders and numbering above). Throws as zwart_powell_step.
-/// Cost: linear in the number of corners (a k-gon costs O(k)); one hash table of edges.
+/// Cost: as zwart_powell_step (a k-gon costs O(k)).
 PolyMesh doo_sabin_step(const PolyMesh& in);
 
 /// One step of `scheme`.

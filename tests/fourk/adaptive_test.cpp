@@ -20,6 +20,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "fourk/topology_oracle.hpp"
 #include "multitri/errors.hpp"
 #include "multitri/mt_front.hpp"
 #include "multitri/query.hpp"
@@ -985,7 +986,8 @@ TEST(AdaptiveBadInput, ImplicitSurfacesAndBaseMeshes) {
   TriMesh base;
   base.positions = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}};
   base.indices = {0, 1, 2, 0, 2, 2};
-  expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.1f)); }, "base face 1 is degenerate");
+  expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.1f)); },
+                 "base mesh: face 1 repeats vertex 2 (a degenerate face)");
   base.indices = {0, 1, 2, 0, 1, 3};
   expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.1f)); }, "same direction");
   base.indices = {0, 1, 7};
@@ -993,7 +995,7 @@ TEST(AdaptiveBadInput, ImplicitSurfacesAndBaseMeshes) {
   // Two faces on one vertex triple (a closed pillow): its first split used to escape as a logic_error.
   base.indices = {0, 1, 2, 0, 2, 1};
   expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.01f)); },
-                 "base face 0 has the same three vertices as face 1");
+                 "base mesh: face 1 has the same vertices as face 0 (a doubled face)");
   base.indices.clear();
   expect_invalid([&] { build_adaptive_implicit(sphere, base, with_tolerance(0.1f)); }, "no face");
   // A base vertex at the centre of the sphere: the gradient vanishes and no direction is known.
@@ -1008,6 +1010,46 @@ TEST(AdaptiveBadInput, ImplicitSurfacesAndBaseMeshes) {
   const auto param = build_adaptive_parametric(saddle_parametric(), with_tolerance(0.2f));
   const std::vector<FaceId> bad_faces{0, static_cast<FaceId>(param.mt.num_faces())};
   expect_invalid([&] { adaptive_domain_mesh(param, bad_faces); }, "not a face");
+}
+
+// Triangle grids damaged at random (testing::damaged_grid), their vertices on the unit sphere, as the base
+// of build_adaptive_implicit: refused exactly when the brute-force oracle of a FourKMesh's manifold rules
+// (topology_oracle.hpp) finds one broken, naming the oracle's element in find_topology_problem's words.
+TEST(AdaptiveBadInput, BaseMeshesRefusedAsTheTopologyOracleSays) {
+  ImplicitSurface sphere;
+  sphere.value = [](const glm::dvec3& p) { return glm::dot(p, p) - 1.0; };
+  std::mt19937 rng(6007);
+  std::map<TopologyRule, int> seen;
+  int meshes = 0, built = 0;
+  for (int round = 0; meshes < 500; ++round) {
+    const testing::DamagedGrid grid = testing::damaged_grid(rng);
+    if (!grid.triangles_only) continue;
+    ++meshes;
+    TriMesh base = testing::triangles_of(grid.faces, grid.num_vertices);
+    for (Index v = 0; v < grid.num_vertices; ++v) {  // a cap of the sphere, the grid's rows along meridians
+      const float a = 0.3f * float(v % 5), b = 0.2f + 0.25f * float(v / 5);
+      base.positions[v] = {std::cos(a) * std::sin(b), std::sin(a) * std::sin(b), std::cos(b)};
+    }
+    const TopologyProblem oracle = testing::slow_topology_problem(grid.faces, kFourKMeshRules);
+    ++seen[oracle.rule];
+    try {
+      (void)build_adaptive_implicit(sphere, base, with_tolerance(1.0f));
+      EXPECT_FALSE(oracle) << "round " << round << ": " << describe_topology_problem(oracle);
+      ++built;
+    } catch (const InvalidInput& e) {
+      const std::string what = e.what();
+      if (!oracle) {
+        EXPECT_EQ(what.find("base mesh: "), std::string::npos) << "round " << round << ": " << what;
+        continue;
+      }
+      EXPECT_EQ(e.element(), oracle.element()) << "round " << round << ": " << what;
+      EXPECT_EQ(what, testing::refusal("build_adaptive_implicit: base mesh", oracle)) << "round " << round;
+    }
+  }
+  for (TopologyRule r : {TopologyRule::kNone, TopologyRule::kRepeatedCorner, TopologyRule::kNonManifoldEdge,
+                         TopologyRule::kInconsistentOrientation, TopologyRule::kDoubledFace})
+    EXPECT_GT(seen[r], 10) << int(r);
+  EXPECT_GT(built, 100);
 }
 
 // The counts of Figure 20 at the tolerances above (printed for the report), and how far the guarantee at the

@@ -7,14 +7,17 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <random>
 #include <set>
 #include <string>
+#include <utility>
 #include <unordered_map>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "fourk/topology_oracle.hpp"
 #include "mesh_fixtures.hpp"
 #include "mt_oracles.hpp"
 #include <glm/geometric.hpp>
@@ -548,6 +551,73 @@ TEST(BisectionBuilder, BadInputThrows) {
   // A face with none of the listed edges.
   const std::array<std::array<VertexId, 2>, 1> one{{{0, 1}}};
   EXPECT_THROW(mark_edges(tet, one), InvalidInput);
+}
+
+// A marking for a triangle mesh, compatible where it can be: faces paired greedily, in order, across an edge
+// the other runs the other way (the pair marks it), an unpaired face marks a border edge, else edge 0.
+std::vector<std::uint8_t> greedy_marking(const testing::FaceList& faces) {
+  std::vector<std::uint8_t> mark(faces.size(), 3);
+  auto twin = [&](std::size_t f, std::size_t k) -> std::size_t {
+    const auto [a, b] = testing::side(faces[f], k);
+    for (std::size_t g = 0; g < faces.size(); ++g)
+      if (g != f && testing::runs(faces[g], a, b) == -1) return g;
+    return faces.size();
+  };
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    if (mark[f] != 3) continue;
+    for (std::size_t k = 0; k < 3 && mark[f] == 3; ++k) {
+      const std::size_t g = twin(f, k);
+      if (g == faces.size()) continue;
+      if (mark[g] != 3) continue;
+      const auto [a, b] = testing::side(faces[f], k);
+      for (std::size_t j = 0; j < 3; ++j)
+        if (testing::side(faces[g], j) == std::pair(b, a)) {
+          mark[f] = std::uint8_t(k);
+          mark[g] = std::uint8_t(j);
+        }
+    }
+    for (std::size_t k = 0; k < 3 && mark[f] == 3; ++k)
+      if (twin(f, k) == faces.size()) mark[f] = std::uint8_t(k);
+    if (mark[f] == 3) mark[f] = 0;
+  }
+  return mark;
+}
+
+// Triangle grids damaged at random (testing::damaged_grid): the builder refuses a base exactly when the
+// brute-force oracle of the manifold rules (topology_oracle.hpp, a FourKMesh's rules) finds one broken,
+// naming the oracle's element in find_topology_problem's words; a base that keeps them is built, or refused
+// for its marking only.
+TEST(BisectionBuilder, RefusesWhatTheTopologyOracleRefuses) {
+  std::mt19937 rng(3001);
+  std::map<TopologyRule, int> seen;
+  int built = 0, meshes = 0;
+  for (int round = 0; meshes < 700; ++round) {
+    const testing::DamagedGrid grid = testing::damaged_grid(rng);
+    if (!grid.triangles_only) continue;
+    ++meshes;
+    const TriMesh base = testing::triangles_of(grid.faces, grid.num_vertices);
+    const std::vector<std::uint8_t> mark = greedy_marking(grid.faces);
+    const TopologyProblem oracle = testing::slow_topology_problem(grid.faces, kFourKMeshRules);
+    ++seen[oracle.rule];
+    try {
+      const Mt mt = build_bisection_mt(base, mark, 2);
+      EXPECT_FALSE(oracle) << "round " << round << ": " << describe_topology_problem(oracle);
+      EXPECT_NO_THROW(mt.validate()) << "round " << round;
+      ++built;
+    } catch (const InvalidInput& e) {
+      const std::string what = e.what();
+      if (!oracle) {
+        EXPECT_NE(what.find("(incompatible marking)"), std::string::npos) << "round " << round << ": " << what;
+        continue;
+      }
+      EXPECT_EQ(e.element(), oracle.element()) << "round " << round << ": " << what;
+      EXPECT_EQ(what, testing::refusal("build_bisection_mt", oracle)) << "round " << round;
+    }
+  }
+  for (TopologyRule r : {TopologyRule::kNone, TopologyRule::kRepeatedCorner, TopologyRule::kNonManifoldEdge,
+                         TopologyRule::kInconsistentOrientation, TopologyRule::kDoubledFace})
+    EXPECT_GT(seen[r], 20) << int(r);
+  EXPECT_GT(built, 100);
 }
 
 TEST(BisectionBuilder, LongestEdgesOfRightTrianglesAreCompatible) {

@@ -154,77 +154,17 @@ TEST(TopologyProblem, RefusesMalformedInput) {
   }
 }
 
-// Grids of quads and triangles damaged at random (faces reversed, doubled as they are or reversed, fins on
-// edges, faces dropped, corners repeated, vertices glued, the order shuffled): the fast search agrees with
-// the brute-force reading of its contract under both rule sets, PolyMesh::validate() refuses exactly what
-// it reports with its element, and so does the FourKMesh constructor on the all-triangle meshes.
+// Grids of quads and triangles damaged at random (testing::damaged_grid): the fast search agrees with the
+// brute-force reading of its contract under both rule sets, PolyMesh::validate() refuses exactly what it
+// reports with its element, and so does the FourKMesh constructor on the all-triangle meshes.
 TEST(TopologyProblem, AgreesWithBruteForceOnDamagedGrids) {
   std::mt19937 rng(4711);
-  auto pick = [&rng](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
   std::map<TopologyRule, int> seen_poly, seen_fourk;
   int fourk_meshes = 0;
   for (int round = 0; round < 1500; ++round) {
-    const std::size_t w = 1 + pick(4), h = 1 + pick(3);
-    const bool triangles_only = pick(2) == 0;
-    Index nv = Index((w + 1) * (h + 1));
-    testing::FaceList faces;
-    for (std::size_t y = 0; y < h; ++y)
-      for (std::size_t x = 0; x < w; ++x) {
-        const Index a = Index(y * (w + 1) + x), b = a + 1, c = b + Index(w + 1), d = a + Index(w + 1);
-        if (triangles_only || pick(3) == 0) {
-          faces.push_back({a, b, c});
-          faces.push_back({a, c, d});
-        } else {
-          faces.push_back({a, b, c, d});
-        }
-      }
-    const std::size_t damages = pick(4);
-    for (std::size_t k = 0; k < damages; ++k) {
-      std::vector<Index>& f = faces[pick(faces.size())];
-      switch (pick(8)) {
-        case 0: std::reverse(f.begin(), f.end()); break;
-        case 1: {
-          std::vector<Index> copy = faces[pick(faces.size())];
-          if (pick(2) == 0) std::reverse(copy.begin(), copy.end());
-          faces.push_back(copy);
-          break;
-        }
-        case 2: {
-          const std::size_t i = pick(f.size());
-          faces.push_back({f[(i + 1) % f.size()], f[i], nv++});
-          break;
-        }
-        case 3:
-          if (faces.size() > 1) faces.erase(faces.begin() + std::ptrdiff_t(pick(faces.size())));
-          break;
-        case 4:
-          if (!triangles_only) f[pick(f.size())] = f[pick(f.size())];
-          break;
-        case 5: {  // glue two vertices: bow-ties, and sometimes worse
-          const Index from = Index(pick(nv)), to = Index(pick(nv));
-          for (auto& g : faces)
-            for (Index& c : g)
-              if (c == from) c = to;
-          break;
-        }
-        case 6: {  // a lone triangle touching the grid at one corner
-          faces.push_back({f[0], nv, nv + 1});
-          nv += 2;
-          break;
-        }
-        default: {  // a pillow: a triangle and its reverse, on one grid corner or apart
-          const Index a = pick(2) == 0 ? f[0] : nv++;
-          faces.push_back({a, nv, nv + 1});
-          faces.push_back({nv + 1, nv, a});
-          nv += 2;
-          break;
-        }
-      }
-    }
-    // Gluing can leave a triangle with a repeated corner in a triangles-only mesh: that is a case too.
-    std::shuffle(faces.begin(), faces.end(), rng);
-    for (auto& f : faces) std::rotate(f.begin(), f.begin() + std::ptrdiff_t(pick(f.size())), f.end());
-
+    const testing::DamagedGrid grid = testing::damaged_grid(rng);
+    const testing::FaceList& faces = grid.faces;
+    const bool triangles_only = grid.triangles_only;
     const PolyMesh p = poly_of(faces);
     for (const TopologyRules& rules : {kPolyMeshRules, kFourKMeshRules}) {
       const TopologyProblem fast = find_topology_problem(p, rules);

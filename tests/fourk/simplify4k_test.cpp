@@ -29,6 +29,7 @@
 #include "multitri/mt_front.hpp"
 #include "multitri/query.hpp"
 #include "distance_oracle.hpp"
+#include "fourk/topology_oracle.hpp"
 #include "test_support.hpp"
 
 namespace varmesh {
@@ -671,6 +672,37 @@ TEST(Simplify4k, BadInputThrowsNamingTheElement) {
   EXPECT_THROW(simplify4k(grid, o), InvalidInput);
   const Simplify4kResult r = simplify4k(grid);
   EXPECT_THROW(simplify4k_level_front(r, r.num_levels()), InvalidInput);
+}
+
+// Triangle grids damaged at random (testing::damaged_grid): simplify4k refuses a mesh exactly when the
+// brute-force oracle of a FourKMesh's manifold rules (topology_oracle.hpp) finds one broken, naming the
+// oracle's element in find_topology_problem's words, and simplifies the others (bow-ties included).
+TEST(Simplify4k, RefusesWhatTheTopologyOracleRefuses) {
+  std::mt19937 rng(5150);
+  std::map<TopologyRule, int> seen;
+  int meshes = 0;
+  Simplify4kOptions o;
+  o.max_levels = 3;
+  for (int round = 0; meshes < 700; ++round) {
+    const testing::DamagedGrid grid = testing::damaged_grid(rng);
+    if (!grid.triangles_only) continue;
+    ++meshes;
+    const TriMesh mesh = testing::triangles_of(grid.faces, grid.num_vertices);
+    const TopologyProblem oracle = testing::slow_topology_problem(grid.faces, kFourKMeshRules);
+    ++seen[oracle.rule];
+    try {
+      const Simplify4kResult r = simplify4k(mesh, o);
+      EXPECT_FALSE(oracle) << "round " << round << ": " << describe_topology_problem(oracle);
+      EXPECT_NO_THROW(r.mt.validate()) << "round " << round;
+    } catch (const InvalidInput& e) {
+      ASSERT_TRUE(oracle) << "round " << round << ": " << e.what();
+      EXPECT_EQ(e.element(), oracle.element()) << "round " << round << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()), testing::refusal("simplify4k", oracle)) << "round " << round;
+    }
+  }
+  for (TopologyRule r : {TopologyRule::kNone, TopologyRule::kRepeatedCorner, TopologyRule::kNonManifoldEdge,
+                         TopologyRule::kInconsistentOrientation, TopologyRule::kDoubledFace})
+    EXPECT_GT(seen[r], 20) << int(r);
 }
 
 TEST(Simplify4k, NonManifoldVertexIsLocked) {

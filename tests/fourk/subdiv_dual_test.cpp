@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <map>
 #include <new>
@@ -21,6 +22,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -28,6 +30,7 @@
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
+#include "fourk/topology_oracle.hpp"
 #include "multitri/errors.hpp"
 
 #include "alloc_guard.hpp"  // replaces operator new for this executable
@@ -869,6 +872,82 @@ TEST(DualSteps, StepsThrowExactlyWhenValidateDoes) {
   }
   EXPECT_GT(accepted, 300);
   EXPECT_GT(rejected, 300);
+}
+
+// What PolyMesh::validate() throws on `m` ("" when it passes), without its "polygon mesh: ".
+std::string validate_refusal(const PolyMesh& m, std::uint64_t* element) {
+  try {
+    m.validate();
+    return "";
+  } catch (const InvalidInput& e) {
+    *element = e.element();
+    const std::string what = e.what(), prefix = "polygon mesh: ";
+    return what.starts_with(prefix) ? what.substr(prefix.size()) : what;
+  }
+}
+
+// Grids damaged at random (testing::damaged_grid), some also given a face of two corners, a corner out of
+// range or a NaN after their topological damage: each entry point refuses a mesh exactly when
+// PolyMesh::validate() does, with validate()'s element and words (its own name for "polygon mesh"), so on a
+// mesh with several problems the one validate() names; and a manifold rule exactly when the brute-force
+// oracle (topology_oracle.hpp) finds it broken, naming the oracle's element.
+TEST(DualSteps, RefuseWhatValidateAndTheOracleRefuse) {
+  std::mt19937 rng(1807);
+  auto pick = [&rng](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  std::map<TopologyRule, int> seen;
+  int accepted = 0, other_damage = 0;
+  for (int round = 0; round < 1200; ++round) {
+    const testing::DamagedGrid grid = testing::damaged_grid(rng);
+    const std::size_t damage = pick(6);
+    PolyMesh m;
+    for (std::size_t f = 0; f < grid.faces.size(); ++f) {
+      if (damage == 0 && f == grid.faces.size() / 2) m.add_face(std::vector<Index>{0, 1});  // a two-corner face
+      m.add_face(grid.faces[f]);
+    }
+    for (Index v = 0; v < grid.num_vertices; ++v)
+      m.positions.emplace_back(double(v % 5), double(v / 5), 0.25 * (v % 3));
+    if (damage == 1) m.corners[pick(m.corners.size())] = grid.num_vertices + Index(pick(3));  // out of range
+    if (damage == 2) m.positions[pick(m.positions.size())].y = std::numeric_limits<double>::quiet_NaN();
+    const bool damaged_more = damage < 3;
+    other_damage += damaged_more;
+    std::uint64_t element = InvalidInput::kNoElement;
+    const std::string refusal = validate_refusal(m, &element);
+    const TopologyProblem oracle = testing::slow_topology_problem(grid.faces, kPolyMeshRules);
+    if (!damaged_more) {
+      ASSERT_EQ(!refusal.empty(), bool(oracle)) << "round " << round << ": " << refusal;
+      if (oracle) {
+        EXPECT_EQ(element, oracle.element()) << "round " << round;
+        EXPECT_EQ("polygon mesh: " + refusal, testing::refusal("polygon mesh", oracle)) << "round " << round;
+      }
+      ++seen[oracle.rule];
+    }
+    accepted += refusal.empty();
+    const std::pair<const char*, std::function<void()>> entries[] = {
+        {"zwart_powell_step", [&] { (void)zwart_powell_step(m); }},
+        {"doo_sabin_step", [&] { (void)doo_sabin_step(m); }},
+        {"dual_mesh_size", [&] { (void)dual_mesh_size(m, DualScheme::kDooSabin, 2); }},
+        {"subdivide_dual", [&] { (void)subdivide_dual(m, DualScheme::kZwartPowell, 2); }},
+    };
+    for (const auto& [who, run] : entries) {
+      try {
+        run();
+        EXPECT_TRUE(refusal.empty()) << "round " << round << ": " << who << " took what validate() refuses: "
+                                     << refusal;
+      } catch (const InvalidInput& e) {
+        ASSERT_FALSE(refusal.empty()) << "round " << round << ": " << e.what();
+        EXPECT_EQ(e.element(), element) << "round " << round << ": " << e.what();
+        EXPECT_EQ(std::string(e.what()), std::string(who) + ": " + refusal) << "round " << round;
+      }
+    }
+    if (refusal.empty()) {
+      for (const DualScheme scheme : kSchemes) ASSERT_NO_THROW(dual_step(m, scheme).validate()) << "round " << round;
+    }
+  }
+  for (TopologyRule r : {TopologyRule::kNone, TopologyRule::kRepeatedCorner, TopologyRule::kNonManifoldEdge,
+                         TopologyRule::kInconsistentOrientation, TopologyRule::kNonManifoldVertex})
+    EXPECT_GT(seen[r], 30) << int(r);
+  EXPECT_GT(other_damage, 300);
+  EXPECT_GT(accepted, 100);
 }
 
 TEST(DualSteps, AbsurdStepsAreRefusedBeforeAllocating) {

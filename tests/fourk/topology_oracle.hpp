@@ -1,13 +1,17 @@
 #pragma once
 // A slow, literal reading of find_topology_problem's contract (fourk/poly_mesh.hpp) for small meshes, to hold
 // the fast code (sorted sides, union-find) to: each rule by brute force over the faces, and the edge rules'
-// order by asking, side by side in face order, whether the faces up to that side already break a rule.
+// order by asking, side by side in face order, whether the faces up to that side already break a rule. And
+// the damaged meshes to hold them to (damaged_grid), shared by the tests of the builders that check the rules.
 #include <algorithm>
 #include <cstddef>
+#include <random>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "fourk/poly_mesh.hpp"
+#include "multitri/errors.hpp"
 
 namespace varmesh::testing {
 
@@ -111,6 +115,94 @@ inline TopologyProblem slow_topology_problem(const FaceList& faces, const Topolo
     }
   }
   return p;
+}
+
+// A small grid of quads, or of triangles only, damaged at random: faces reversed, doubled as they are or
+// reversed, fins on edges, faces dropped, corners repeated, vertices glued, lone triangles and pillows
+// added, then the faces shuffled and their corners rotated. Most such meshes break a rule, some several,
+// some none. Vertices are numbered below num_vertices; some may be unreferenced.
+struct DamagedGrid {
+  FaceList faces;
+  Index num_vertices = 0;
+  bool triangles_only = false;
+};
+
+inline DamagedGrid damaged_grid(std::mt19937& rng) {
+  auto pick = [&rng](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  const std::size_t w = 1 + pick(4), h = 1 + pick(3);
+  const bool triangles_only = pick(2) == 0;
+  Index nv = Index((w + 1) * (h + 1));
+  FaceList faces;
+  for (std::size_t y = 0; y < h; ++y)
+    for (std::size_t x = 0; x < w; ++x) {
+      const Index a = Index(y * (w + 1) + x), b = a + 1, c = b + Index(w + 1), d = a + Index(w + 1);
+      if (triangles_only || pick(3) == 0) {
+        faces.push_back({a, b, c});
+        faces.push_back({a, c, d});
+      } else {
+        faces.push_back({a, b, c, d});
+      }
+    }
+  const std::size_t damages = pick(4);
+  for (std::size_t k = 0; k < damages; ++k) {
+    std::vector<Index>& f = faces[pick(faces.size())];
+    switch (pick(8)) {
+      case 0: std::reverse(f.begin(), f.end()); break;
+      case 1: {
+        std::vector<Index> copy = faces[pick(faces.size())];
+        if (pick(2) == 0) std::reverse(copy.begin(), copy.end());
+        faces.push_back(copy);
+        break;
+      }
+      case 2: {
+        const std::size_t i = pick(f.size());
+        faces.push_back({f[(i + 1) % f.size()], f[i], nv++});
+        break;
+      }
+      case 3:
+        if (faces.size() > 1) faces.erase(faces.begin() + std::ptrdiff_t(pick(faces.size())));
+        break;
+      case 4:
+        if (!triangles_only) f[pick(f.size())] = f[pick(f.size())];
+        break;
+      case 5: {  // glue two vertices: bow-ties, and sometimes worse
+        const Index from = Index(pick(nv)), to = Index(pick(nv));
+        for (auto& g : faces)
+          for (Index& c : g)
+            if (c == from) c = to;
+        break;
+      }
+      case 6: {  // a lone triangle touching the grid at one corner
+        faces.push_back({f[0], nv, nv + 1});
+        nv += 2;
+        break;
+      }
+      default: {  // a pillow: a triangle and its reverse, on one grid corner or apart
+        const Index a = pick(2) == 0 ? f[0] : nv++;
+        faces.push_back({a, nv, nv + 1});
+        faces.push_back({nv + 1, nv, a});
+        nv += 2;
+        break;
+      }
+    }
+  }
+  // Gluing can leave a triangle with a repeated corner in a triangles-only mesh: that is a case too.
+  std::shuffle(faces.begin(), faces.end(), rng);
+  for (auto& f : faces) std::rotate(f.begin(), f.begin() + std::ptrdiff_t(pick(f.size())), f.end());
+  return {std::move(faces), nv, triangles_only};
+}
+
+// The faces as a TriMesh (all triangles) over num_vertices vertices spread on a 5-wide sheet, bent a little.
+inline TriMesh triangles_of(const FaceList& faces, Index num_vertices) {
+  TriMesh t;
+  for (Index v = 0; v < num_vertices; ++v) t.positions.emplace_back(float(v % 5), float(v / 5), 0.25f * float(v % 3));
+  for (const auto& f : faces) t.indices.insert(t.indices.end(), f.begin(), f.end());
+  return t;
+}
+
+// The words of the refusal of `problem` by the function `who` (its InvalidInput's what()).
+inline std::string refusal(const std::string& who, const TopologyProblem& problem) {
+  return InvalidInput(who + ": " + describe_topology_problem(problem), problem.element()).what();
 }
 
 inline bool same_problem(const TopologyProblem& a, const TopologyProblem& b) {
