@@ -81,7 +81,8 @@ inline constexpr std::uint64_t kMaxDualCorners = std::uint64_t{1} << 31;
 /// One Zwart-Powell (mid-edge) step (rules, borders and numbering above). `in` must satisfy
 /// PolyMesh::validate(): the step checks the same conditions while it finds the edges and throws the
 /// InvalidInput validate() would throw, with the same element and the same words after "zwart_powell_step: "
-/// (validate's "polygon mesh: "), a manifold rule as find_topology_problem(in, kPolyMeshRules) reports it.
+/// (validate's "polygon mesh: "; for a mesh of no face, "the polygon mesh has no face"), a manifold rule as
+/// find_topology_problem(in, kPolyMeshRules) reports it.
 /// Throws InvalidInput when the output would have more than kMaxDualCorners corners. Cost: linear in the
 /// number of corners, but for find_topology_problem's sort of the sides around each vertex.
 PolyMesh zwart_powell_step(const PolyMesh& in);
