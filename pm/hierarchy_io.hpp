@@ -38,7 +38,9 @@
 ///
 /// Reading checks, in this order, before allocating anything: the magic, the version, the flags, the
 /// declared size against the real size (a shorter file is "truncated" at the byte where it ends), every
-/// count against the format's 32-bit indices and against the file size, then the checksum; then it parses
+/// count against the format's 32-bit indices and against the file size, then the checksum (on a file of
+/// 4 MiB or more, computed on a second thread while the arrays are parsed; a mismatch is still the error
+/// reported, whatever the parse finds); then it parses
 /// (non-finite floats, locked flags other than 0/1 and decreasing ring offsets are rejected with their byte
 /// offset) and runs VertexHierarchyBuilder::finish. Every failure is an IoError carrying the file name, the
 /// byte offset when there is one (IoError::byte_offset()) and the reason; finish's complaints (InvalidInput,

@@ -20,7 +20,7 @@
 /// children created before parents, keys consistent with the tree shape, bounds nested (child sphere inside
 /// parent sphere up to rounding, child error <= parent error, child cone inside parent cone up to 2e-3
 /// radians), faces' corners are leaves, fl^/fr^ contain vl^/vr^ and one descendant of each child; and the
-/// topology, by replaying the collapses on the original faces (check_collapses()): the original mesh is an
+/// topology, by replaying the collapses on the original faces: the original mesh is an
 /// oriented 2-manifold with border (no repeated corner, each directed edge once, each vertex one fan, no two
 /// faces on the same corners), and each record, in node order, is a legal full-edge collapse of its current
 /// mesh as the analysis makes them: vt and vu share exactly the faces fl^ (holding vt -> vu) and fr^ (vu ->
@@ -208,7 +208,12 @@ class VertexHierarchy {
   /// a broken invariant, a bug of the analysis or an edited file that the reader would have refused)
   /// naming the first broken one. An empty hierarchy passes. O(nodes + faces) for the records, plus the
   /// replay of the collapses: O(sum over collapses of the faces around both ends).
-  void validate() const;
+  ///
+  /// `threads`: 1 runs every check on the caller's thread, in the order of the header comment; 2 splits the
+  /// work with a second thread (the replay in two parts, the second starting from the mesh the first must
+  /// leave); 0 (the default) takes 2 for hierarchies of 2^14 collapses or more on a machine with two cores or
+  /// more, else 1. Any value gives the same outcome: the same error, the first a serial run meets.
+  void validate(unsigned threads = 0) const;
   /// Bytes held by the arrays the synthesis phase reads.
   std::size_t memory_bytes() const noexcept;
 
@@ -216,8 +221,10 @@ class VertexHierarchy {
   friend class VertexHierarchyBuilder;
   friend struct HierarchyFileAccess;
 
-  // The topological part of validate() (see the header comment).
-  void check_collapses() const;
+  // The parts of validate() around the replay of the collapses (which vertex_hierarchy.cpp's Replay does):
+  // before it, the nodes and records; after it, the leaves' cones and the maps.
+  void check_nodes() const;
+  void check_leaf_geometry() const;
   // Exchanges every member below: a member added there must be added here.
   void swap(VertexHierarchy& other) noexcept;
 
