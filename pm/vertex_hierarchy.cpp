@@ -386,10 +386,6 @@ bool cone_inside(const NormalCone& c, const NormalCone& p) noexcept {
   return cos_phi * cos_t - sine(cos_phi) * sine(cos_t) >= cos_p * kCosDelta - sine(cos_p) * kSinDelta;
 }
 
-}  // namespace
-
-namespace {
-
 [[noreturn]] void fail_validate(const std::string& what) { throw std::logic_error("VertexHierarchy::validate: " + what); }
 
 // Per leaf, its original faces in increasing face id (a counting sort of the corners): where every replay of
@@ -517,8 +513,6 @@ class Replay {
 Replay::Replay(const VertexHierarchy& h, const LeafFaces& lf, std::size_t first) : h_(h), next_(first) {
   const std::size_t nl = h.num_leaves(), nn = h.num_nodes(), nf = h.num_faces();
   const std::span<const Index> corners = h.face_corners();
-  // act[v], for v < first: the node standing for v in the mesh before `first`. Parents come after their
-  // children, so walking down from first - 1 meets each parent before its children.
   if (first == nl) {  // the original mesh: every face alive on its leaves, a leaf's run its faces
     cur_.assign(corners.begin(), corners.end());
     alive_.assign(nf, 1);
@@ -533,6 +527,8 @@ Replay::Replay(const VertexHierarchy& h, const LeafFaces& lf, std::size_t first)
     seen_.assign(nn, 0);
     return;
   }
+  // act[v], for v < first: the node standing for v in the mesh before `first`. Parents come after their
+  // children, so walking down from first - 1 meets each parent before its children.
   std::vector<Index> act(first);
   for (std::size_t v = first; v-- > 0;) {
     const Index p = h.parent(static_cast<Index>(v));
@@ -545,26 +541,36 @@ Replay::Replay(const VertexHierarchy& h, const LeafFaces& lf, std::size_t first)
   }
   cur_.resize(corners.size());
   for (std::size_t i = 0; i < corners.size(); ++i) cur_[i] = act[corners[i]];
+  // The runs, laid out as a walk of each active node's subtree (first child first) would list them, but in
+  // passes over the arrays in order instead of the walk's scattered reads: per node the number of alive
+  // faces under it, bottom-up; per node the place of its run, top-down; then each leaf's alive faces there.
+  std::vector<std::size_t> weight(first, 0), place(first, 0);
+  for (std::size_t l = 0; l < nl; ++l)
+    for (Index f : lf.of(static_cast<Index>(l))) weight[l] += alive_[f];
+  for (std::size_t v = nl; v < first; ++v) {
+    const CollapseRecord& r = h.record(static_cast<Index>(v));
+    weight[v] = weight[r.vt] + weight[r.vu];
+  }
   run_.assign(nn, Run{});
-  pool_.reserve(3 * corners.size());
-  std::vector<Index> stack;
-  for (std::size_t v = 0; v < first; ++v) {
-    if (act[v] != v) continue;
-    run_[v].off = pool_.size();
-    stack.push_back(static_cast<Index>(v));
-    while (!stack.empty()) {
-      const Index u = stack.back();
-      stack.pop_back();
-      if (u < nl) {
-        for (Index f : lf.of(u))
-          if (alive_[f]) pool_.push_back(f);
-      } else {
-        const CollapseRecord& r = h.record(u);
-        stack.push_back(r.vu);
-        stack.push_back(r.vt);  // the first child's faces first
-      }
+  std::size_t total = 0;
+  for (std::size_t v = 0; v < first; ++v)
+    if (act[v] == v) {
+      place[v] = total;
+      run_[v].off = total;
+      run_[v].cnt = run_[v].live = static_cast<Index>(weight[v]);
+      total += weight[v];
     }
-    run_[v].cnt = run_[v].live = static_cast<Index>(pool_.size() - run_[v].off);
+  for (std::size_t v = first; v-- > nl;) {
+    const CollapseRecord& r = h.record(static_cast<Index>(v));
+    place[r.vt] = place[v];
+    place[r.vu] = place[v] + weight[r.vt];
+  }
+  pool_.reserve(std::max(total, 3 * corners.size()));
+  pool_.resize(total);
+  for (std::size_t l = 0; l < nl; ++l) {
+    std::size_t at = place[l];
+    for (Index f : lf.of(static_cast<Index>(l)))
+      if (alive_[f]) pool_[at++] = f;
   }
   mark_.assign(nn, 0);
   seen_.assign(nn, 0);
@@ -716,10 +722,10 @@ void Replay::check_base() const {
     if (!alive_[f]) fail_validate("base face " + std::to_string(f) + " was removed by a collapse");
 }
 
-// The share of the replay the caller's thread takes when split: the other thread has the checks of the
-// nodes and records, the original mesh and the leaves' geometry besides (balanced on the dragon, 436k
-// collapses).
-constexpr std::size_t kFirstPartPercent = 74;
+// The share of the replay the caller's thread takes when split: the other thread has besides the checks of
+// the nodes and records, of the original mesh and of the leaves' geometry, and the derivation of the mesh it
+// starts from (balanced on the dragon, 436k collapses).
+constexpr std::size_t kFirstPartPercent = 70;
 
 }  // namespace
 
@@ -834,14 +840,16 @@ void VertexHierarchy::validate(unsigned threads) const {
   }
   // Split in two: this thread replays the first collapses from the original mesh while the other checks the
   // nodes and the original mesh, then replays the rest from the mesh they leave (see Replay) and checks the
-  // leaves. Every check runs whatever the others find (each is safe on any hierarchy that finish() accepted);
-  // the error reported is the first one a serial run meets: the other thread's before the replay (nodes,
-  // original mesh), then this thread's, then the other's later ones (valid only if the first part passed).
+  // leaves. The parts run without waiting for each other's verdict (each is safe on any hierarchy that
+  // finish() accepted, only its conclusions need the earlier checks to pass); the error reported is the first
+  // one a serial run meets: the other thread's before the replay (nodes, original mesh), then this thread's,
+  // then the other's later ones. A part whose outcome can no longer matter stops early.
   const std::size_t split = std::clamp<std::size_t>(nl + nc * kFirstPartPercent / 100, nl + 1, nn - 1);
   const LeafFaces lf = leaf_faces(*this);
   std::exception_ptr first_error, second_error;
   bool second_failed_early = false;
-  std::atomic<bool> stop{false};  // the first part's outcome no longer matters
+  std::atomic<bool> stop{false};          // the first part's outcome no longer matters
+  std::atomic<bool> first_failed{false};  // nor then does the second part's
   auto second = [&] {
     try {
       check_nodes();
@@ -854,7 +862,8 @@ void VertexHierarchy::validate(unsigned threads) const {
     }
     try {
       Replay rest(*this, lf, split);
-      rest.run(nn, nullptr);
+      rest.run(nn, &first_failed);
+      if (first_failed.load(std::memory_order_relaxed)) return;
       rest.check_base();
       check_leaf_geometry();
     } catch (...) {
@@ -873,6 +882,7 @@ void VertexHierarchy::validate(unsigned threads) const {
     first.run(split, &stop);
   } catch (...) {
     first_error = std::current_exception();
+    first_failed.store(true, std::memory_order_relaxed);
   }
   helper.join();
   if (second_failed_early) std::rethrow_exception(second_error);

@@ -904,6 +904,100 @@ TEST(SrMeshApi, RefineChecksItsNodeAndForgetsTheSinkOnAnError) {
   sr.validate();
 }
 
+// A file large enough (over 4 MiB, over 2^14 collapses) that the reader computes the checksum beside the
+// parse, runs the untrusted checks beside the derivation, and validates with the replay split over two
+// threads: whichever of those finds a fault first, the error is the one the serial order gives.
+TEST(HierarchyIo, LargeFilesReportTheSerialOrdersError) {
+  const Encoded fixture = encoded(build_vertex_hierarchy(make_grid(150, 140)));
+  const VertexHierarchy& h = fixture.h;
+  const Bytes& good = fixture.good;
+  const Layout& at = fixture.at;
+  const std::size_t nl = h.num_leaves(), nc = h.num_collapses(), nn = h.num_nodes();
+  ASSERT_GE(good.size(), std::size_t{1} << 22);
+  ASSERT_GE(nc, std::size_t{1} << 14);
+  expect_identical(h, decode(good));
+  // Not under the allocation guard, whose limit is below this file's arrays.
+  auto error_of = [](const Bytes& b) {
+    try {
+      decode(b);
+    } catch (const IoError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "decode accepted a damaged file";
+    return IoError("mem.vmh", "accepted");
+  };
+  auto rejected_large = [&](Bytes b, const std::string& reason) {
+    reseal(b);
+    const IoError e = error_of(b);
+    EXPECT_TRUE(contains(e.reason(), "not a valid vertex hierarchy")) << e.what();
+    EXPECT_TRUE(contains(e.reason(), reason)) << e.what();
+  };
+  const std::uint32_t nan_bits = 0x7FC00000u;
+  {
+    Bytes b = good;  // a NaN without a new checksum: the checksum is named, not the NaN
+    put_le(b, at.positions + 12 * 5, nan_bits, 4);
+    const IoError e = error_of(b);
+    EXPECT_TRUE(contains(e.reason(), "checksum mismatch")) << e.what();
+  }
+  {
+    Bytes b = good;  // the same NaN sealed: now it is the NaN, at its byte
+    put_le(b, at.positions + 12 * 5 + 4, nan_bits, 4);
+    reseal(b);
+    const IoError e = error_of(b);
+    EXPECT_TRUE(contains(e.reason(), "non-finite value in the position of node 5")) << e.what();
+    EXPECT_EQ(e.byte_offset(), at.positions + 12 * 5 + 4);
+  }
+  {
+    // An untrusted check's fault (a leaf's input vertex) and a later one of the derivation (a child that is
+    // not an earlier node): the untrusted check comes first.
+    Bytes b = good;
+    put_le(b, at.leaf_to_input, 0xFFFFFFFEu, 4);
+    put_le(b, at.records + 40 * (nc - 1), nn - 1, 4);
+    rejected_large(b, "leaf 0: input vertex 4294967294 beyond the input's");
+  }
+  // Hoppe's fn0 and fn1 exchanged in collapse i: only the replay at node nl + i can tell.
+  auto swap_fn = [&](Bytes& b, std::size_t i) {
+    const CollapseRecord& r = h.record(static_cast<Index>(nl + i));
+    put_le(b, at.records + 40 * i + 24, r.fn[1], 4);
+    put_le(b, at.records + 40 * i + 28, r.fn[0], 4);
+  };
+  auto with_two_fn = [&](std::size_t i) {
+    while (i < nc && (h.record(static_cast<Index>(nl + i)).fn[0] == kInvalid ||
+                      h.record(static_cast<Index>(nl + i)).fn[1] == kInvalid ||
+                      h.record(static_cast<Index>(nl + i)).fn[0] == h.record(static_cast<Index>(nl + i)).fn[1]))
+      ++i;
+    return i;
+  };
+  const std::size_t early = with_two_fn(nc / 10), late = with_two_fn(nc - nc / 20);
+  ASSERT_LT(late, nc);
+  const std::string late_node = "node " + std::to_string(nl + late) + " (replaying the collapses): fn0..fn3";
+  const std::string early_node = "node " + std::to_string(nl + early) + " (replaying the collapses): fn0..fn3";
+  {
+    Bytes b = good;  // near the end of the collapses
+    swap_fn(b, late);
+    rejected_large(b, late_node);
+  }
+  {
+    Bytes b = good;  // near the end and near the start: the earlier collapse is named
+    swap_fn(b, late);
+    swap_fn(b, early);
+    rejected_large(b, early_node);
+  }
+  {
+    // A node check's fault (a child's error above its parent's, found before any replay) with the late
+    // replay fault: the node check is named.
+    Bytes b = good;
+    swap_fn(b, late);
+    const std::size_t v = nl + nc / 2;
+    const Index child = h.record(static_cast<Index>(v)).vt;
+    float big = h.bound(static_cast<Index>(v)).error * 2.0f + 1.0f;
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &big, 4);
+    put_le(b, at.bounds + 36 * child + 16, bits, 4);
+    rejected_large(b, "node " + std::to_string(v) + ": child " + std::to_string(child) + " has a larger error");
+  }
+}
+
 TEST(HierarchyIo, EncodingAnEmptyHierarchyThrows) {
   EXPECT_THROW(encode_vertex_hierarchy(VertexHierarchy{}), InvalidInput);
 }
