@@ -62,9 +62,13 @@ std::size_t VertexHierarchy::memory_bytes() const noexcept {
 
 namespace {
 
-// Below this many collapses (finish(): nodes) the checks run on one thread: a second one would save less than
-// it costs.
-constexpr std::size_t kSplitCollapses = 1u << 14;
+// From this many nodes finish() runs the untrusted checks on a second thread (it costs a thread, no work).
+constexpr std::size_t kThreadedUntrustedNodes = 1u << 14;
+// From this many collapses validate() splits the replay. The split has costs of its own (the mesh the second
+// part starts from, a second set of scratch arrays): on the bunny, 35k collapses, 10 ms of processor time
+// more for a load of 50, which a busy second core turns into a loss; on the dragon, 436k, a tenth more time
+// for a third less wall time.
+constexpr std::size_t kSplitCollapses = 1u << 17;
 
 // How many distinct values `values` holds, all below `bound`: one pass over a bit per possible value when
 // that takes at most a 64-bit word per value, else a sort.
@@ -211,7 +215,7 @@ VertexHierarchy VertexHierarchyBuilder::finish(Raw raw, bool validate, bool trus
   // thread meanwhile. Their failure is reported first, as when they ran before the derivation.
   std::exception_ptr untrusted_error;
   std::thread untrusted;
-  if (!trusted && nn >= kSplitCollapses) {
+  if (!trusted && nn >= kThreadedUntrustedNodes) {
     try {
       untrusted = std::thread([&] {
         try {

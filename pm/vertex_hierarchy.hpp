@@ -211,7 +211,7 @@ class VertexHierarchy {
   ///
   /// `threads`: 1 runs every check on the caller's thread, in the order of the header comment; 2 splits the
   /// work with a second thread (the replay in two parts, the second starting from the mesh the first must
-  /// leave); 0 (the default) takes 2 for hierarchies of 2^14 collapses or more on a machine with two cores or
+  /// leave); 0 (the default) takes 2 for hierarchies of 2^17 collapses or more on a machine with two cores or
   /// more, else 1. Any value gives the same outcome: the same error, the first a serial run meets.
   void validate(unsigned threads = 0) const;
   /// Bytes held by the arrays the synthesis phase reads.

@@ -14,6 +14,7 @@
 #include "multitri/tri_mesh.hpp"
 #include "pm/dual_pieces.hpp"
 #include "pm/sr_mesh.hpp"
+#include "pm/vertex_hierarchy.hpp"
 
 namespace varmesh::testing {
 
@@ -37,6 +38,27 @@ inline std::string differs_from_dual_pieces(const SrMesh& sr) {
     if (rot(sr.face(f.original)) != rot(f.corners)) return "face " + std::to_string(f.original) + " corners differ";
   }
   return "";
+}
+
+/// The arrays a hierarchy was assembled from, read back through the public accessors (for edits that
+/// VertexHierarchyBuilder::finish is then given).
+inline VertexHierarchyBuilder::Raw raw_of(const VertexHierarchy& h) {
+  VertexHierarchyBuilder::Raw raw;
+  raw.num_leaves = h.num_leaves();
+  raw.positions.assign(h.positions().begin(), h.positions().end());
+  raw.colors.assign(h.colors().begin(), h.colors().end());
+  for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
+    raw.records.push_back(h.record(static_cast<Index>(v)));
+    const auto ring = h.stored_ring(static_cast<Index>(v));
+    raw.ring_items.insert(raw.ring_items.end(), ring.begin(), ring.end());
+    raw.ring_offsets.push_back(static_cast<Index>(raw.ring_items.size()));
+  }
+  raw.faces.assign(h.face_corners().begin(), h.face_corners().end());
+  for (std::size_t v = 0; v < h.num_nodes(); ++v) raw.bounds.push_back(h.bound(static_cast<Index>(v)));
+  raw.leaf_to_input.assign(h.leaf_to_input().begin(), h.leaf_to_input().end());
+  raw.face_to_input.assign(h.face_to_input().begin(), h.face_to_input().end());
+  raw.repair = h.repair_report();
+  return raw;
 }
 
 /// Regular grid of (n+1) x (m+1) vertices on z = f(x, y) over [0,1]^2, alternating diagonals; has a border.

@@ -87,26 +87,6 @@ TEST(VertexHierarchy, MovedFromIsEmptyAndMovedToIsTheOriginal) {
   EXPECT_EQ(sr.num_faces(), reference.num_faces());
 }
 
-// The arrays a hierarchy was assembled from, read back through the public accessors.
-VertexHierarchyBuilder::Raw raw_of(const VertexHierarchy& h) {
-  VertexHierarchyBuilder::Raw raw;
-  raw.num_leaves = h.num_leaves();
-  raw.positions.assign(h.positions().begin(), h.positions().end());
-  raw.colors.assign(h.colors().begin(), h.colors().end());
-  for (std::size_t v = h.num_leaves(); v < h.num_nodes(); ++v) {
-    raw.records.push_back(h.record(static_cast<Index>(v)));
-    const auto ring = h.stored_ring(static_cast<Index>(v));
-    raw.ring_items.insert(raw.ring_items.end(), ring.begin(), ring.end());
-    raw.ring_offsets.push_back(static_cast<Index>(raw.ring_items.size()));
-  }
-  raw.faces.assign(h.face_corners().begin(), h.face_corners().end());
-  for (std::size_t v = 0; v < h.num_nodes(); ++v) raw.bounds.push_back(h.bound(static_cast<Index>(v)));
-  raw.leaf_to_input.assign(h.leaf_to_input().begin(), h.leaf_to_input().end());
-  raw.face_to_input.assign(h.face_to_input().begin(), h.face_to_input().end());
-  raw.repair = h.repair_report();
-  return raw;
-}
-
 // What validate(threads) throws ("" when it passes).
 std::string validate_error(const VertexHierarchy& h, unsigned threads) {
   try {
@@ -125,7 +105,7 @@ TEST(VertexHierarchy, SplitValidationReportsTheSerialError) {
   const VertexHierarchy good = build_vertex_hierarchy(testing::make_grid(16, 13));
   ASSERT_EQ(validate_error(good, 1), "");
   ASSERT_EQ(validate_error(good, 2), "");
-  const VertexHierarchyBuilder::Raw base = raw_of(good);
+  const VertexHierarchyBuilder::Raw base = testing::raw_of(good);
   const std::size_t nl = good.num_leaves(), nn = good.num_nodes(), nc = good.num_collapses(), nf = good.num_faces();
   ASSERT_GT(nc, 100u);
   std::mt19937 rng(20261125);
