@@ -10,6 +10,12 @@
 #include <fstream>
 #include <random>
 
+#include <algorithm>
+#include <system_error>
+#include <thread>
+
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "multitri/errors.hpp"
@@ -99,26 +105,64 @@ void InterruptCleanup::install_handlers() {
   }
 }
 
-std::string read_file(const std::string& path) {
+FileBytes read_file_bytes(const std::string& path) {
   // A folder opens as a stream on Linux, and seeking to its end reports a size of up to 2^63 bytes. A FIFO
   // blocks the open until something writes to it (forever, with no writer), and a device reads as empty or
-  // endless: none of them has a size to read, so only a regular file (links followed) is opened.
+  // endless: none of them has a size to read, so only a regular file (links followed) is opened; fstat()
+  // then checks the file that was opened.
   std::error_code ec;
   const std::filesystem::file_status st = std::filesystem::status(path, ec);
   if (std::filesystem::is_directory(st)) throw IoError(path, "cannot read: it is a folder, not a file");
   if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
     throw IoError(path, "cannot read: it is " + describe(st.type()) + ", not a regular file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
-  std::string data;
-  in.seekg(0, std::ios::end);
-  const auto size = in.tellg();
-  if (size < 0) throw IoError(path, "cannot determine the file size");
-  data.resize(static_cast<std::size_t>(size));
-  in.seekg(0, std::ios::beg);
-  if (size > 0 && !in.read(data.data(), size)) throw IoError(path, "read failed");
-  return data;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) throw IoError(path, std::string("cannot determine the file size: ") + std::strerror(errno));
+  if (!S_ISREG(info.st_mode)) throw IoError(path, "cannot read: it is not a regular file");
+  if (info.st_size < 0) throw IoError(path, "cannot determine the file size");
+  const auto size = static_cast<std::size_t>(info.st_size);
+  FileBytes out;
+  out.bytes_.reset(new char[size > 0 ? size : 1]);  // default-initialised: not zeroed
+  out.size_ = size;
+  // [lo, hi) by pread(); the error (errno) or -1 when the file ended first, 0 on success.
+  auto read_range = [fd, buf = out.bytes_.get()](std::size_t lo, std::size_t hi) -> int {
+    constexpr std::size_t kChunk = std::size_t{1} << 30;  // Linux moves at most ~2 GiB per call
+    while (lo < hi) {
+      const ssize_t got = ::pread(fd, buf + lo, std::min(hi - lo, kChunk), static_cast<off_t>(lo));
+      if (got < 0) {
+        if (errno == EINTR) continue;
+        return errno;
+      }
+      if (got == 0) return -1;
+      lo += static_cast<std::size_t>(got);
+    }
+    return 0;
+  };
+  int first = 0, second = 0;
+  const std::size_t mid = size >= kParallelReadBytes ? size / 2 : size;
+  std::thread other;
+  if (mid < size) {
+    try {
+      other = std::thread([&] { second = read_range(mid, size); });
+    } catch (const std::system_error&) {  // no thread to be had: read it all here
+      second = read_range(mid, size);
+    }
+  }
+  first = read_range(0, mid);
+  if (other.joinable()) other.join();
+  for (const int r : {first, second}) {
+    if (r == -1) throw IoError(path, "read failed: the file became shorter while it was read");
+    if (r != 0) throw IoError(path, std::string("read failed: ") + std::strerror(r));
+  }
+  return out;
 }
+
+std::string read_file(const std::string& path) { return std::string(read_file_bytes(path).view()); }
 
 std::string bounded_file_name(const std::string& prefix, const std::string& name, const std::string& suffix) {
   constexpr std::size_t kNameMax = 255;

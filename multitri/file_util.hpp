@@ -2,12 +2,36 @@
 /// Whole-file reading and atomic writing, shared by every reader and writer.
 #include <cstddef>
 #include <filesystem>
+#include <memory>
 #include <string>
+#include <string_view>
 
 namespace varmesh {
 
+/// A whole file's bytes, as read_file_bytes() read them (an uninitialised buffer the reads fill: nothing is
+/// zeroed first, which took a third of the time of reading an 89 MB hierarchy file).
+class FileBytes {
+ public:
+  FileBytes() = default;
+  const char* data() const noexcept { return bytes_.get(); }
+  std::size_t size() const noexcept { return size_; }
+  std::string_view view() const noexcept { return {bytes_.get(), size_}; }
+  operator std::string_view() const noexcept { return view(); }
+
+ private:
+  friend FileBytes read_file_bytes(const std::string& path);
+  std::unique_ptr<char[]> bytes_;
+  std::size_t size_ = 0;
+};
+
 /// Reads a whole file into memory. Throws IoError (a folder, a FIFO, a device or a socket, which are refused
-/// before they are opened; or a file that cannot be opened or read).
+/// before they are opened; or a file that cannot be opened or read, or that shrinks while it is read). A file
+/// of kParallelReadBytes or more is read as two halves at once (two threads: the copy out of the page cache
+/// is the cost, and it halves).
+FileBytes read_file_bytes(const std::string& path);
+inline constexpr std::size_t kParallelReadBytes = std::size_t{16} << 20;
+
+/// read_file_bytes() as a string.
 std::string read_file(const std::string& path);
 
 /// Where a write to `path` lands, by the output policy of every writer: `path` itself when it is a regular

@@ -168,7 +168,7 @@ HeightField read_raw_field(const std::string& path, const HeightFieldReadOptions
                    IoError::kNoLine, std::min<std::uint64_t>(actual, expected));
   };
   if (!ec && on_disk != expected) throw size_error(on_disk);
-  const std::string data = read_file(path);
+  const FileBytes data = read_file_bytes(path);
   if (data.size() != expected) throw size_error(data.size());
 
   HeightField field;

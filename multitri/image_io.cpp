@@ -185,7 +185,7 @@ bool png_write_guarded(png_structp png, png_infop info, const PngWriteJob* job) 
   return true;
 }
 
-std::uint32_t read_be32(const std::string& data, std::size_t pos) {
+std::uint32_t read_be32(std::string_view data, std::size_t pos) {
   return (std::uint32_t{static_cast<unsigned char>(data[pos])} << 24) |
          (std::uint32_t{static_cast<unsigned char>(data[pos + 1])} << 16) |
          (std::uint32_t{static_cast<unsigned char>(data[pos + 2])} << 8) |
@@ -194,7 +194,7 @@ std::uint32_t read_be32(const std::string& data, std::size_t pos) {
 
 // Sum of the IDAT chunk lengths, walking the chunk list (stops quietly at a truncated chunk: libpng reports
 // that later with its own message).
-std::uint64_t idat_bytes(const std::string& data) {
+std::uint64_t idat_bytes(std::string_view data) {
   std::uint64_t total = 0;
   std::size_t pos = 8;
   while (data.size() - pos >= 12) {
@@ -276,7 +276,7 @@ float Image::value(std::size_t x, std::size_t y, int c) const noexcept {
 }
 
 Image read_png(const std::string& path) {
-  const std::string data = read_file(path);
+  const FileBytes data = read_file_bytes(path);
   if (data.size() < 8 || png_sig_cmp(reinterpret_cast<png_const_bytep>(data.data()), 0, 8) != 0) {
     throw IoError(path, "not a PNG file (bad signature)", IoError::kNoLine, 0);
   }

@@ -52,7 +52,7 @@ MeshFormat mesh_format_from_path(const std::string& path) {
 
 TriMesh read_mesh(const std::string& path, ReadInfo* info) {
   mesh_format_from_path(path);  // an unknown extension is refused before the file is read
-  return read_mesh_data(path, read_file(path), info);
+  return read_mesh_data(path, read_file_bytes(path), info);
 }
 
 TriMesh read_mesh_data(const std::string& path, std::string_view data, ReadInfo* info) {

@@ -307,6 +307,6 @@ Mt decode_mt(std::string_view bytes, const std::string& name) {
 
 void write_mt(const std::string& path, const Mt& mt) { write_file_atomically(path, encode_mt(mt)); }
 
-Mt read_mt(const std::string& path) { return decode_mt(read_file(path), path); }
+Mt read_mt(const std::string& path) { return decode_mt(read_file_bytes(path), path); }
 
 }  // namespace varmesh

@@ -470,7 +470,7 @@ void write_vertex_hierarchy(const std::string& path, const VertexHierarchy& h) {
 }
 
 VertexHierarchy read_vertex_hierarchy(const std::string& path) {
-  const std::string data = read_file(path);
+  const FileBytes data = read_file_bytes(path);
   return decode_vertex_hierarchy(
       std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(data.data()), data.size()), path);
 }

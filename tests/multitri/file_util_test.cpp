@@ -1,10 +1,12 @@
 // InterruptCleanup: the temporary files and folders recorded while they exist, and what a signal's handler
 // removes (recorded files, then recorded folders that are empty) before the process ends by that signal.
+// read_file_bytes: every byte in place, for sizes on both sides of the two-thread read, and the refusals.
 #include "multitri/file_util.hpp"
 
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -99,6 +101,39 @@ TEST(InterruptCleanupDeathTest, ASignalRemovesWhatIsRecorded) {
     EXPECT_FALSE(fs::exists(outer)) << sig;
     EXPECT_TRUE(fs::exists(kept / "users.obj")) << sig;
   }
+}
+
+// Sizes around the one from which two threads read halves, each byte a function of its offset (a half
+// read into the wrong place, or a chunk boundary off by one, changes some byte).
+TEST(ReadFileBytes, EveryByteArrivesInPlace) {
+  const fs::path dir = testing::scratch_dir("read_file_bytes");
+  auto byte_at = [](std::size_t i) { return static_cast<char>((i * 2654435761u) >> 13); };
+  for (const std::size_t size : {std::size_t{0}, std::size_t{1}, std::size_t{4097}, kParallelReadBytes - 1,
+                                 kParallelReadBytes, kParallelReadBytes + 3}) {
+    std::string contents(size, '\0');
+    for (std::size_t i = 0; i < size; ++i) contents[i] = byte_at(i);
+    const fs::path path = dir / ("f" + std::to_string(size));
+    std::ofstream(path, std::ios::binary).write(contents.data(), static_cast<std::streamsize>(size));
+    const FileBytes got = read_file_bytes(path.string());
+    ASSERT_EQ(got.size(), size);
+    EXPECT_TRUE(got.view() == contents) << size;
+    EXPECT_EQ(read_file(path.string()), contents) << size;
+  }
+}
+
+TEST(ReadFileBytes, RefusesWhatIsNotARegularFile) {
+  const fs::path dir = testing::scratch_dir("read_file_bytes_refusals");
+  auto message = [](const fs::path& p) {
+    try {
+      read_file_bytes(p.string());
+    } catch (const IoError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message(dir).find("folder"), std::string::npos) << message(dir);
+  EXPECT_NE(message(dir / "missing").find("cannot open"), std::string::npos) << message(dir / "missing");
+  EXPECT_NE(message("/dev/null").find("not a regular file"), std::string::npos) << message("/dev/null");
 }
 
 }  // namespace
