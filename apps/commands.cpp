@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -828,6 +829,57 @@ int cmd_render(const RenderArgs& a) {
   return 0;
 }
 
+// Levenshtein distance of two short words (option names).
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// The first argument shaped like an option that neither `cmd` nor a command above it has, as a message that
+// names it and the nearest long option of `cmd` when one is close; empty when every such argument is known
+// (the caller then reports CLI11's own message). A negative number is a value, not an option.
+std::string unknown_option_message(const CLI::App& cmd, int argc, char** argv) {
+  auto known = [&](const std::string& name) {
+    for (const CLI::App* c = &cmd; c != nullptr; c = c->get_parent())
+      if (c->get_option_no_throw(name) != nullptr) return true;
+    return false;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") break;
+    if (arg.size() < 2 || arg[0] != '-') continue;
+    if (arg[1] != '-' && (std::isdigit(static_cast<unsigned char>(arg[1])) || arg[1] == '.')) continue;
+    const bool is_long = arg[1] == '-';
+    const std::string name = is_long ? arg.substr(0, arg.find('=')) : arg.substr(0, 2);  // "-ofile": -o
+    if (known(name)) continue;
+    std::string where = "varmesh";
+    std::vector<std::string> path;
+    for (const CLI::App* c = &cmd; c != nullptr && c->get_parent() != nullptr; c = c->get_parent()) path.push_back(c->get_name());
+    for (auto it = path.rbegin(); it != path.rend(); ++it) where += " " + *it;
+    std::string nearest;
+    std::size_t best = std::max<std::size_t>(2, name.size() / 3) + 1;  // closer than this to count
+    for (const CLI::Option* opt : cmd.get_options())
+      for (const std::string& l : opt->get_lnames())
+        if (const std::size_t d = edit_distance(name, "--" + l); d < best) {
+          best = d;
+          nearest = "--" + l;
+        }
+    return "unknown option '" + name + "' for " + where + (nearest.empty() ? "" : " (did you mean " + nearest + "?)") +
+           "; see " + where + " --help";
+  }
+  return {};
+}
+
 }  // namespace
 
 int run(int argc, char** argv) {
@@ -908,8 +960,8 @@ int run(int argc, char** argv) {
 
   // A misspelt command ("varmesh biuld", "varmesh pm qeury"): CLI11 says only that a subcommand is
   // required. Name the word and the commands known there.
+  const CLI::App* at = &app;  // the command the arguments name (after the loop)
   {
-    const CLI::App* at = &app;
     for (int i = 1; i < argc && !at->get_subcommands({}).empty(); ++i) {
       const std::string word = argv[i];
       if (word.empty() || word[0] == '-') continue;  // --help, --version
@@ -935,6 +987,13 @@ int run(int argc, char** argv) {
     // errors of the commands themselves (CLI11's own exit codes 100+ and its "Run with --help" line are
     // not what the README promises).
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    // A misspelt option ("--eror 20"): CLI11 lists the arguments it did not expect, the option's value
+    // first, and suggests nothing, or reports first a required option the misspelling left out ("--outptu").
+    // Name the option and the nearest one the command has.
+    if (const std::string unknown = unknown_option_message(*at, argc, argv); !unknown.empty()) {
+      std::fprintf(stderr, "varmesh: error: %s\n", unknown.c_str());
+      return 1;
+    }
     std::fprintf(stderr, "varmesh: error: %s (see --help)\n", e.what());
     return 1;
   }

@@ -705,6 +705,15 @@ std::size_t base_pieces(const VertexHierarchy& h) {
 // every connected piece keeps at least 4 vertices. (The dragon at --vertices 500 ended at 2469 vertices,
 // exit 0 and no word: its repair had cut it into hundreds of pieces.)
 void print_target_note(const PmBuildArgs& a, const QemStats& st, const VertexHierarchy& h) {
+  // A target the input meets already: say so rather than let "0 collapses" look like a failure.
+  if (st.collapses == 0 && ((a.vertices > 0 && st.base_vertices <= a.vertices) || (a.faces > 0 && st.base_faces <= a.faces))) {
+    const bool by_vertices = a.vertices > 0;
+    std::printf("note: %s %zu is at or above the input's %s: nothing was collapsed, and the hierarchy holds the "
+                "input mesh as its base mesh\n",
+                by_vertices ? "--vertices" : "--faces", by_vertices ? a.vertices : a.faces,
+                count_noun(by_vertices ? st.base_vertices : st.base_faces, by_vertices ? "vertex" : "face").c_str());
+    return;
+  }
   std::string target;
   if (a.vertices > 0 && st.base_vertices > a.vertices)
     target = "--vertices " + std::to_string(a.vertices) + " not reached: the base mesh has " + std::to_string(st.base_vertices) + " vertices";

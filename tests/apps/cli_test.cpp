@@ -483,6 +483,30 @@ TEST(Cli, AnUnknownCommandIsNamed) {
   EXPECT_EQ(r.status, 0);
 }
 
+// A misspelt option is named, with the nearest option of that command when one is close (CLI11 said "The
+// following arguments were not expected: 20 --eror", or that a required option was missing when the
+// misspelt one was it). A negative number is a value, not an option.
+TEST(Cli, AnUnknownOptionIsNamedWithTheNearestOne) {
+  const auto dir = testing::scratch_dir("cli_unknown_option");
+  struct Case {
+    std::string args, expected;
+  };
+  for (const Case& c : {Case{"terrain x.pgm --eror 20 -o y.obj", "unknown option '--eror' for varmesh terrain (did you mean --error?)"},
+                        Case{"pm query x.vmh --bugdet 5", "unknown option '--bugdet' for varmesh pm query (did you mean --budget?)"},
+                        Case{"pm build x.obj --outptu y.vmh", "unknown option '--outptu' for varmesh pm build (did you mean --output?)"},
+                        Case{"render --zzzzzz x.obj -o y.png", "unknown option '--zzzzzz' for varmesh render; see varmesh render --help"},
+                        Case{"terrain x.pgm -q -o y.obj", "unknown option '-q' for varmesh terrain"}}) {
+    const CmdResult r = run(c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_TRUE(testing::contains(r.err, c.expected)) << c.args << ": " << r.err;
+  }
+  const CmdResult r = run("query x.vrm --budget -5 -o y.obj", dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_FALSE(testing::contains(r.err, "unknown option")) << r.err;
+  EXPECT_TRUE(testing::contains(r.err, "--budget")) << r.err;
+}
+
 }  // namespace
 }  // namespace varmesh
 

@@ -80,10 +80,28 @@ TEST(PmCli, BuildWritesTheHierarchyTheLibraryReads) {
   }
 }
 
-// --threads runs the library's parallel analysis: the same hierarchy as QemOptions::threads gives, not the
-// serial one (a torus of 65,536 faces: two parts of at least 16,384).
-// Run without --quiet: the progress line, rewritten in place with carriage returns, is for a terminal only;
-// here stderr is a file, as in a log, and gets none of it (the first report comes at 4,096 collapses).
+// A target the input meets already: no collapse, and a note that says why (it read as a failure: "0
+// collapses" and nothing else). A target below the input gives no such note.
+TEST(PmCli, ATargetTheInputMeetsIsANote) {
+  const Built b = build_torus("pm_cli_target_met");
+  const std::size_t nv = b.input.num_vertices(), nf = b.input.num_faces();
+  for (const std::string& target : {"--faces " + std::to_string(nf + 1000), "--faces " + std::to_string(nf),
+                                   "--vertices " + std::to_string(nv)}) {
+    SCOPED_TRACE(target);
+    const CmdResult r = run("pm build " + b.mesh.string() + " -o " + b.vmh.string() + " --quiet " + target, b.dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const bool by_faces = target.rfind("--faces", 0) == 0;
+    EXPECT_TRUE(contains(r.out, "note: " + target + " is at or above the input's " +
+                                    (by_faces ? std::to_string(nf) + " faces" : std::to_string(nv) + " vertices")))
+        << r.out;
+    EXPECT_EQ(read_vertex_hierarchy(b.vmh.string()).num_collapses(), 0u);
+  }
+  const CmdResult r = run("pm build " + b.mesh.string() + " -o " + b.vmh.string() + " --quiet --faces " + std::to_string(nf - 10), b.dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(contains(r.out, "at or above")) << r.out;
+  EXPECT_GT(read_vertex_hierarchy(b.vmh.string()).num_collapses(), 0u);
+}
+
 // Hierarchy outputs take their extension in any case, as mesh outputs do (".VMH" and ".Vrm" were refused
 // as "must end in .vmh"); `info` tells a hierarchy by its magic either way.
 TEST(PmCli, HierarchyExtensionsInAnyCase) {
@@ -103,6 +121,10 @@ TEST(PmCli, HierarchyExtensionsInAnyCase) {
   EXPECT_TRUE(contains(r.err, "must end in .vmh")) << r.err;
 }
 
+// --threads runs the library's parallel analysis: the same hierarchy as QemOptions::threads gives, not the
+// serial one (a torus of 65,536 faces: two parts of at least 16,384).
+// Run without --quiet: the progress line, rewritten in place with carriage returns, is for a terminal only;
+// here stderr is a file, as in a log, and gets none of it (the first report comes at 4,096 collapses).
 TEST(PmCli, ThreadsGiveTheLibrarysParallelHierarchy) {
   const fs::path dir = testing::scratch_dir("pm_cli_threads");
   const fs::path mesh = dir / "torus.obj", vmh = dir / "torus.vmh";
