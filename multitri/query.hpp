@@ -15,7 +15,8 @@
 ///   a conforming mesh on which no exposed element in focus is wanted, but update() may keep a finer one.
 /// - With a triangle budget, refinement is priority driven: wanted elements in decreasing priority
 ///   (Criterion::priority, ties broken parents first), stopping before the first refinement that would
-///   exceed the budget; update() reaches the same state for monotone priorities. A time budget stops
+///   exceed the budget; update() reaches the same state for monotone priorities, and when the front
+///   cannot coarsen down to the budget from where it is, it answers as extract() does. A time budget stops
 ///   refinement when the time is up (the result is then conforming but depends on the machine).
 ///
 /// A structure plugs in by providing a front type that models RefinableFront (below): MtFront for explicit
@@ -461,7 +462,20 @@ QueryStats update(F& front, const Query& q) {
     while (!refine_heap.empty() && front.is_refined(refine_heap.top().element)) refine_heap.pop();
     const bool over = front.num_faces() > q.triangle_budget;
     if (!over && refine_heap.empty()) break;
-    if (!pop_coarsenable(m)) break;
+    if (!pop_coarsenable(m)) {
+      // Over the budget with nothing left to coarsen: a front whose remaining coarsenings all wait for
+      // something else (a Kim-Lee mesh whose collapses are postponed, section 4.4 of Kim-Lee 2001, gave 48
+      // faces for a budget of 6; listing the candidates again found none coarsenable) answers from the
+      // coarsest state, as extract() does. A front at its coarsest state already (a budget below the base
+      // mesh) gets the same answer this way.
+      if (over) {
+        QueryStats fresh = extract(front, q);
+        fresh.evaluated += stats.evaluated;
+        fresh.coarsened += stats.coarsened;
+        return fresh;
+      }
+      break;
+    }
     if (over || detail::before(refine_heap.top(), m)) {
       coarsen(m);
     } else {

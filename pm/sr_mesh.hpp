@@ -36,6 +36,9 @@
 /// pairs finer than extract() would: an ecol postponed by the degenerate case (section 4.4) whose extra common
 /// neighbour goes away through a split of update()'s refine step, after its coarsen step, or that no split
 /// ever unblocks (see coarsen_all). The answer is still a fixpoint of the query (tests/pm/sr_query_test.cpp).
+/// With a triangle budget such postponed collapses can leave the mesh over the budget (common near the base
+/// mesh: from a view-dependent state, budgets a few faces above a 4-face base all stalled); update() then
+/// answers from the base mesh as extract() does, so the budget holds under every scheme.
 ///
 /// Invariants (validate()): every active face's corners are active; adjacency is symmetric and across
 /// opposite directed edges; every active vertex has one fan of faces (disc or half-disc); node states are

@@ -50,7 +50,7 @@ werror=OFF
 cmake -S . -B build/release -DCMAKE_BUILD_TYPE=Release -DVARMESH_WERROR=$werror >/dev/null
 cmake --build build/release -j"$jobs"
 if [ $build_asan -eq 1 ]; then
-  cmake -S . -B build/asan -DCMAKE_BUILD_TYPE=Debug -DVARMESH_SANITIZE=ON -DVARMESH_BUILD_BENCH=OFF \
+  cmake -S . -B build/asan -DCMAKE_BUILD_TYPE=Debug -DVARMESH_SANITIZE=ON -DVARMESH_BUILD_BENCH=OFF -DVARMESH_BUILD_SOAK=ON \
         -DVARMESH_WERROR=$werror >/dev/null
   cmake --build build/asan -j"$jobs"
 fi

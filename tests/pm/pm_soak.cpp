@@ -57,7 +57,7 @@ struct NamedOptions {
   QemOptions options;
 };
 
-// The option sets of the brief. Those that cannot change anything for a mesh (colours on a mesh without
+// The option sets tried. Those that cannot change anything for a mesh (colours on a mesh without
 // any) are left out.
 std::vector<NamedOptions> option_sets(const TriMesh& m) {
   std::vector<NamedOptions> out;
