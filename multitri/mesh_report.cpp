@@ -32,6 +32,9 @@ constexpr Index low(std::uint64_t key) noexcept { return static_cast<Index>(key 
 // Buckets hold a handful of keys (a vertex is the smaller end of about three edges), so insertion sort wins;
 // a hub vertex with a long fan falls back to std::sort to keep the whole O(F log F).
 void sort_bucket(std::uint64_t* first, std::uint64_t* last) {
+  // An empty bucket may be a null range (no edge at all: every face degenerate), where first + 1 is
+  // undefined; a single key is sorted already.
+  if (last - first < 2) return;
   if (last - first > 16) {
     std::sort(first, last);
     return;

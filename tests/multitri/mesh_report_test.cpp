@@ -327,6 +327,18 @@ TEST(MeshReportFixtures, RepeatedIndexFaceIsDegenerateAndIgnored) {
   EXPECT_EQ(r.components, 1u);
 }
 
+// Found by fuzz/fuzz_pipeline: with no non-degenerate face there is no edge, the bucket sort of the edges
+// ran on an empty (null) array and stepped past it (UBSan in the sanitizer build).
+TEST(MeshReportFixtures, OnlyDegenerateFacesGiveNoEdge) {
+  const MeshReport r = analyze_mesh(make_mesh(ring_positions(5), {0, 1, 0}));
+  EXPECT_EQ(r.faces, 1u);
+  EXPECT_EQ(r.degenerate_faces, 1u);
+  EXPECT_EQ(r.edges, 0u);
+  EXPECT_EQ(r.boundary_edges, 0u);
+  EXPECT_EQ(r.unreferenced_vertices, 5u);  // a degenerate face references nothing
+  EXPECT_EQ(r.boundary_loops, 0u);
+}
+
 TEST(MeshReportFixtures, CollinearFaceHasZeroArea) {
   const MeshReport r =
       analyze_mesh(make_mesh({{0, 0, 0}, {1, 1, 1}, {3, 3, 3}, {0, 1, 0}}, {0, 1, 2, 0, 2, 3}));
