@@ -784,8 +784,11 @@ void VertexHierarchy::check_nodes() const {
     for (Index c : {r.vt, r.vu}) {
       const ElementBound &pb = bounds_[v], &cb = bounds_[c];
       if (cb.error > pb.error) fail(name() + ": child " + std::to_string(c) + " has a larger error");
-      const float slack = 1e-4f * (pb.radius + glm::length(pb.center)) + 1e-6f;
-      if (glm::length(cb.center - pb.center) + cb.radius > pb.radius + slack)
+      // In double, as enclose() computes the spheres: a float |d|^2 overflows past ~1.8e19, and a model with
+      // a coordinate near 2e38 failed its own validation (found by fuzz_pipeline).
+      const glm::dvec3 pc(pb.center), cc(cb.center);
+      const double slack = 1e-4 * (double(pb.radius) + glm::length(pc)) + 1e-6;
+      if (glm::length(cc - pc) + double(cb.radius) > double(pb.radius) + slack)
         fail(name() + ": sphere of child " + std::to_string(c) + " is not inside");
       if (!cone_inside(cb.cone, pb.cone)) fail(name() + ": normal cone of child " + std::to_string(c) + " is not inside");
     }

@@ -1208,6 +1208,31 @@ TEST(QemAnalysis, ModelsNearTheFloatLimitAreRefusedOrLoad) {
   EXPECT_GT(refused, 0u);  // 2e38 and more
 }
 
+// One coordinate near the float limit among unit ones (fuzz_pipeline, reduced): the analysis computes its
+// spheres in double, but validate() measured sphere containment in float, where |d|^2 overflowed, and the
+// analysis's own hierarchy failed it ("node 22: sphere of child 21 is not inside").
+TEST(QemAnalysis, ACoordinateNearTheFloatLimitAmongUnitOnesValidates) {
+  const std::string obj =
+      "v 2.7 0 0\nv -1.1802075e-07 2.2e38 0\nv -2.7 -2.360415e-07 0\nv 3.219718e-08 -7.7e22 0\n"
+      "v 1.65 0 0.60621774\nv -7.212379e-08 1.65 0.60621774\nv -1.65 -1.4424758e-07 0.60621774\n"
+      "v 1.9676053e-08 -1.65 0.60621774\nv 1.6500001 0 -0.60\nv -7.21238e-08 1.6500001 -0.6062178\n"
+      "v -1.6500001 -1.442476e-07 -0.6062178\nv 1.9676055e-08 -1.6500001 -5.1\n"
+      "f 4 5 8\nf 5 6 10\nf 5 10 9\nf 6 7 11\nf 6 11 10\nf 7 8 12\nf 7 12 11\nf 8 5 9\nf 8 9 12\n"
+      "f 9 10 2\nf 9 2 1\nf 10 3 2\nf 11 2 4\nf 11 4 3\nf 12 9 1\nf 12 1 4\n";
+  const TriMesh m = read_mesh_data("near_limit.obj", obj);
+  for (const std::size_t target : {std::size_t{0}, std::size_t{3}}) {
+    QemOptions o;
+    o.target_faces = target;
+    try {
+      const VertexHierarchy h = build_vertex_hierarchy(m, o);
+      EXPECT_NO_THROW(h.validate()) << "target " << target;
+      EXPECT_NO_THROW(decode_vertex_hierarchy(encode_vertex_hierarchy(h), "near_limit")) << "target " << target;
+    } catch (const InvalidInput& e) {  // a result that overflows float is refused by name instead
+      EXPECT_NE(std::string(e.what()).find("overflows float"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // The depth limit ignored the bits the tree ids need: with max_depth 62 a chain of collapses and a few
 // separate triangles made a tree whose keys needed 68 bits, and finish() refused the whole hierarchy.
 TEST(QemAnalysis, DepthLeavesRoomForTheTreeIds) {
